@@ -1,0 +1,17 @@
+//! Robust geometric routines shared by plugins, `rtk stress` and the f64
+//! reference: one implementation, generic over [`Real`] (f32 and f64).
+//!
+//! The rules they follow are `research/numerics.md`'s: hit points carry an
+//! error bound, spawned rays are offset past it along the geometric normal
+//! (no scene epsilon), slab tests are conservative and NaN-ordered, and a hit
+//! is accepted only when `t_min < t < t_max` and finite.
+
+mod offset;
+mod real;
+mod slab;
+mod sphere;
+
+pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
+pub use real::{gamma, Real};
+pub use slab::{RayBoxPrecomp, SlabHit};
+pub use sphere::{intersect_sphere, nearest_root, sphere_point_and_error, SphereHit};

@@ -1,0 +1,369 @@
+//! Conveniences on the ABI's plain values: glam conversions, constructors and
+//! the small amount of arithmetic plugins need. Nothing here changes a layout.
+
+use crate::abi::*;
+use glam::Vec3;
+
+impl Float3 {
+    /// Construct.
+    #[inline]
+    pub const fn new(x: f32, y: f32, z: f32) -> Self {
+        Self { x, y, z }
+    }
+    /// As a glam vector.
+    #[inline]
+    pub fn v(self) -> Vec3 {
+        Vec3::new(self.x, self.y, self.z)
+    }
+    /// As an array.
+    #[inline]
+    pub fn to_array(self) -> [f32; 3] {
+        [self.x, self.y, self.z]
+    }
+    /// All components finite.
+    #[inline]
+    pub fn is_finite(self) -> bool {
+        self.x.is_finite() && self.y.is_finite() && self.z.is_finite()
+    }
+}
+
+impl From<Vec3> for Float3 {
+    #[inline]
+    fn from(v: Vec3) -> Self {
+        Self::new(v.x, v.y, v.z)
+    }
+}
+
+impl From<Float3> for Vec3 {
+    #[inline]
+    fn from(v: Float3) -> Self {
+        v.v()
+    }
+}
+
+impl From<[f32; 3]> for Float3 {
+    #[inline]
+    fn from(a: [f32; 3]) -> Self {
+        Self::new(a[0], a[1], a[2])
+    }
+}
+
+impl Color {
+    /// Black.
+    pub const BLACK: Color = Color::new(0.0, 0.0, 0.0);
+    /// Construct.
+    #[inline]
+    pub const fn new(r: f32, g: f32, b: f32) -> Self {
+        Self { r, g, b }
+    }
+    /// A grey level.
+    #[inline]
+    pub const fn splat(v: f32) -> Self {
+        Self::new(v, v, v)
+    }
+    /// From an array.
+    #[inline]
+    pub fn from_array(a: [f32; 3]) -> Self {
+        Self::new(a[0], a[1], a[2])
+    }
+    /// As an array.
+    #[inline]
+    pub fn to_array(self) -> [f32; 3] {
+        [self.r, self.g, self.b]
+    }
+    /// Componentwise product.
+    #[inline]
+    pub fn mul(self, o: Color) -> Color {
+        Color::new(self.r * o.r, self.g * o.g, self.b * o.b)
+    }
+    /// Scale.
+    #[inline]
+    pub fn scale(self, s: f32) -> Color {
+        Color::new(self.r * s, self.g * s, self.b * s)
+    }
+    /// Sum.
+    #[inline]
+    pub fn add(self, o: Color) -> Color {
+        Color::new(self.r + o.r, self.g + o.g, self.b + o.b)
+    }
+    /// True when every component is zero.
+    #[inline]
+    pub fn is_black(self) -> bool {
+        self.r == 0.0 && self.g == 0.0 && self.b == 0.0
+    }
+    /// All components finite.
+    #[inline]
+    pub fn is_finite(self) -> bool {
+        self.r.is_finite() && self.g.is_finite() && self.b.is_finite()
+    }
+}
+
+impl Bounds3 {
+    /// The empty box (min = +inf, max = -inf): the identity of `union`.
+    pub const EMPTY: Bounds3 = Bounds3 {
+        min: Float3::new(f32::INFINITY, f32::INFINITY, f32::INFINITY),
+        max: Float3::new(f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY),
+    };
+    /// From corners.
+    #[inline]
+    pub fn new(min: Vec3, max: Vec3) -> Self {
+        Self {
+            min: min.into(),
+            max: max.into(),
+        }
+    }
+    /// Smallest box containing both.
+    #[inline]
+    pub fn union(self, o: Bounds3) -> Bounds3 {
+        // Written with comparisons rather than f32::min so that an empty box
+        // (infinities) behaves, and a NaN never poisons the result.
+        fn lo(a: f32, b: f32) -> f32 {
+            if b < a {
+                b
+            } else {
+                a
+            }
+        }
+        fn hi(a: f32, b: f32) -> f32 {
+            if b > a {
+                b
+            } else {
+                a
+            }
+        }
+        Bounds3 {
+            min: Float3::new(
+                lo(self.min.x, o.min.x),
+                lo(self.min.y, o.min.y),
+                lo(self.min.z, o.min.z),
+            ),
+            max: Float3::new(
+                hi(self.max.x, o.max.x),
+                hi(self.max.y, o.max.y),
+                hi(self.max.z, o.max.z),
+            ),
+        }
+    }
+    /// Grow to contain a point.
+    #[inline]
+    pub fn include(self, p: Vec3) -> Bounds3 {
+        self.union(Bounds3::new(p, p))
+    }
+    /// True when the box contains no point.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
+    }
+    /// The eight corners.
+    pub fn corners(&self) -> [Vec3; 8] {
+        let (a, b) = (self.min.v(), self.max.v());
+        std::array::from_fn(|i| {
+            Vec3::new(
+                if i & 1 == 0 { a.x } else { b.x },
+                if i & 2 == 0 { a.y } else { b.y },
+                if i & 4 == 0 { a.z } else { b.z },
+            )
+        })
+    }
+}
+
+impl Default for Bounds3 {
+    fn default() -> Self {
+        Bounds3::EMPTY
+    }
+}
+
+impl Ray {
+    /// A ray over `(0, inf)` at time 0, generation 0.
+    #[inline]
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self {
+            origin: origin.into(),
+            dir: dir.into(),
+            t_min: 0.0,
+            t_max: f32::INFINITY,
+            time: 0.0,
+            generation: 0,
+        }
+    }
+    /// Point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin.v() + self.dir.v() * t
+    }
+    /// Is `t` an acceptable hit for this ray: `t_min < t < t_max` and finite.
+    /// Written so that a NaN is never accepted.
+    #[inline]
+    pub fn accepts(&self, t: f32) -> bool {
+        t > self.t_min && t < self.t_max && t.is_finite()
+    }
+}
+
+impl Default for Hit {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Hit {
+    /// No hit yet.
+    #[inline]
+    pub fn new() -> Self {
+        Self {
+            t: f32::INFINITY,
+            depth: 0,
+            stack: [HitEntry::default(); HIT_STACK_DEPTH],
+        }
+    }
+    /// The entry the object at `level` wrote.
+    #[inline]
+    pub fn entry(&self, level: u32) -> &HitEntry {
+        &self.stack[level as usize]
+    }
+    /// Record a primitive hit at `level` (leaf objects): sets `t`, the entry and `depth`.
+    #[inline]
+    pub fn record_leaf(&mut self, level: u32, t: f32, prim: u32, uv: [f32; 2]) {
+        self.t = t;
+        self.stack[level as usize] = HitEntry { index: 0, prim, uv };
+        self.depth = level + 1;
+    }
+    /// Record, at `level`, that child `index` accepted the hit now in `self`
+    /// (aggregates, after the child returned true).
+    #[inline]
+    pub fn record_child(&mut self, level: u32, index: u32) {
+        let e = &mut self.stack[level as usize];
+        e.index = index;
+        e.prim = 0;
+        e.uv = [0.0, 0.0];
+    }
+}
+
+impl LocalGeom {
+    /// Nothing filled, no shader, not an emitter.
+    pub const EMPTY: LocalGeom = LocalGeom {
+        p: Float3::new(0.0, 0.0, 0.0),
+        p_err: Float3::new(0.0, 0.0, 0.0),
+        ng: Float3::new(0.0, 0.0, 1.0),
+        ns: Float3::new(0.0, 0.0, 1.0),
+        dpdu: Float3::new(1.0, 0.0, 0.0),
+        dpdv: Float3::new(0.0, 1.0, 0.0),
+        uv: [0.0, 0.0],
+        shader: NONE_ID,
+        emitter: NONE_ID,
+        filled: 0,
+    };
+}
+
+impl Default for LocalGeom {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+impl InstanceData {
+    /// No bindings.
+    pub const NONE: InstanceData = InstanceData {
+        shader: NONE_ID,
+        emitter: NONE_ID,
+        flags: 0,
+        reserved: 0,
+    };
+}
+
+impl Stats {
+    /// Add another thread's counters.
+    pub fn merge(&mut self, o: &Stats) {
+        for (a, b) in self.rays.iter_mut().zip(o.rays) {
+            *a += b;
+        }
+        self.local_geom_calls += o.local_geom_calls;
+        for (a, b) in self.local_geom_fields.iter_mut().zip(o.local_geom_fields) {
+            *a += b;
+        }
+        self.node_tests += o.node_tests;
+        self.prim_tests += o.prim_tests;
+        self.shader_calls += o.shader_calls;
+        self.light_samples += o.light_samples;
+        self.nonfinite_samples += o.nonfinite_samples;
+        for (a, b) in self.reserved.iter_mut().zip(o.reserved) {
+            *a += b;
+        }
+    }
+}
+
+impl RngState {
+    /// A stream for (seed, pixel, sample): hashed so that neighbouring pixels
+    /// and samples are uncorrelated, and independent of thread scheduling.
+    pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Self {
+        let s = splitmix(seed ^ splitmix(pixel ^ splitmix(sample)));
+        let inc = splitmix(s ^ 0x9E37_79B9_7F4A_7C15) | 1;
+        let mut r = RngState { state: 0, inc };
+        r.next_u32();
+        r.state = r.state.wrapping_add(s);
+        r.next_u32();
+        r
+    }
+    /// Next 32 random bits (PCG32 XSH-RR).
+    #[inline]
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.state;
+        self.state = old
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(self.inc);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        let rot = (old >> 59) as u32;
+        xorshifted.rotate_right(rot)
+    }
+    /// Uniform in [0, 1).
+    #[inline]
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+}
+
+fn splitmix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rng_is_uniform_and_deterministic() {
+        let mut a = RngState::for_sample(1, 2, 3);
+        let mut b = RngState::for_sample(1, 2, 3);
+        let mut sum = 0.0f64;
+        for _ in 0..10_000 {
+            let x = a.next_f32();
+            assert_eq!(x, b.next_f32());
+            assert!((0.0..1.0).contains(&x));
+            sum += x as f64;
+        }
+        assert!((sum / 10_000.0 - 0.5).abs() < 0.01);
+        assert_ne!(
+            RngState::for_sample(1, 2, 3).next_u32(),
+            RngState::for_sample(1, 2, 4).next_u32()
+        );
+    }
+
+    #[test]
+    fn ray_accepts_is_open_and_nan_false() {
+        let r = Ray::new(Vec3::ZERO, Vec3::Z);
+        assert!(!r.accepts(0.0));
+        assert!(r.accepts(1e-30));
+        assert!(!r.accepts(f32::INFINITY));
+        assert!(!r.accepts(f32::NAN));
+    }
+
+    #[test]
+    fn empty_bounds_union_identity() {
+        let b = Bounds3::new(Vec3::ONE, Vec3::splat(2.0));
+        assert_eq!(Bounds3::EMPTY.union(b), b);
+        assert!(Bounds3::EMPTY.is_empty());
+        assert!(!b.is_empty());
+    }
+}
