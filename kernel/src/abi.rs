@@ -270,6 +270,9 @@ pub mod ray_kind {
     pub const SHADOW: u32 = 3;
     /// Diffuse and other scattered rays.
     pub const SCATTER: u32 = 4;
+    /// A ray already counted where it was made (by the camera loop or by
+    /// `trace`): integrators pass this to `intersect` for the ray `li` received.
+    pub const TRACED: u32 = 7;
     /// Number of kinds.
     pub const COUNT: usize = 5;
 }
@@ -416,12 +419,10 @@ pub struct PrepareEnv {
     /// Host context for `parallel_for`.
     pub host: *const c_void,
     /// Run `body(user, i)` for every `i < n` on the host's pool; returns when all are done.
-    pub parallel_for: extern "C" fn(
-        host: *const c_void,
-        n: u64,
-        body: ParallelBody,
-        user: *const c_void,
-    ),
+    pub parallel_for:
+        extern "C" fn(host: *const c_void, n: u64, body: ParallelBody, user: *const c_void),
+    /// Tell the host a file was read (for `--stats` and dependency tracking).
+    pub note_file: extern "C" fn(host: *const c_void, path: *const u8, len: usize),
 }
 
 /// The task body `parallel_for` runs for each index (a wrapper, because the
@@ -468,12 +469,23 @@ pub struct ObjectFns {
     pub bounds: extern "C" fn(this: *const c_void, time0: f32, time1: f32, out: *mut Bounds3),
     /// Bounding sphere over the time interval (optional).
     pub bounding_sphere: Option<
-        extern "C" fn(this: *const c_void, time0: f32, time1: f32, out: *mut BoundingSphere) -> bool,
+        extern "C" fn(
+            this: *const c_void,
+            time0: f32,
+            time1: f32,
+            out: *mut BoundingSphere,
+        ) -> bool,
     >,
     /// Points whose convex hull bounds the object; writes at most `cap`, returns
     /// how many there are (call again with a larger buffer if more) (optional).
     pub hull_points: Option<
-        extern "C" fn(this: *const c_void, time0: f32, time1: f32, out: *mut Float3, cap: u32) -> u32,
+        extern "C" fn(
+            this: *const c_void,
+            time0: f32,
+            time1: f32,
+            out: *mut Float3,
+            cap: u32,
+        ) -> u32,
     >,
     /// Kay–Kajiya slabs: for each of `n` unit normals, the min and max of `n·p`
     /// over the object (optional).

@@ -27,6 +27,7 @@ pub mod abi;
 pub mod geom;
 pub mod sdk;
 mod values;
+pub mod xform;
 
 pub use abi::*;
 pub use glam;

@@ -11,7 +11,7 @@ mod real;
 mod slab;
 mod sphere;
 
-pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to};
+pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to, SHADOW_EPSILON};
 pub use real::{gamma, Real};
 pub use slab::{RayBoxPrecomp, SlabHit};
 pub use sphere::{intersect_sphere, nearest_root, sphere_point_and_error, SphereHit};

@@ -83,20 +83,33 @@ mod tests {
             Vec3::new(1.0, 1.0, -1.0),
         ] {
             let r = Ray::new(o, Vec3::Z);
-            assert!(RayBoxPrecomp::new(&r).intersect(&unit(), 0.0, f32::INFINITY).is_some(), "{o}");
+            assert!(
+                RayBoxPrecomp::new(&r)
+                    .intersect(&unit(), 0.0, f32::INFINITY)
+                    .is_some(),
+                "{o}"
+            );
             let r = Ray::new(o, Vec3::new(-0.0, 0.0, 1.0));
-            assert!(RayBoxPrecomp::new(&r).intersect(&unit(), 0.0, f32::INFINITY).is_some());
+            assert!(RayBoxPrecomp::new(&r)
+                .intersect(&unit(), 0.0, f32::INFINITY)
+                .is_some());
         }
     }
 
     #[test]
     fn misses_and_interval() {
         let r = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
-        let h = RayBoxPrecomp::new(&r).intersect(&unit(), 0.0, f32::INFINITY).unwrap();
+        let h = RayBoxPrecomp::new(&r)
+            .intersect(&unit(), 0.0, f32::INFINITY)
+            .unwrap();
         assert!((h.t0 - 1.0).abs() < 1e-6 && (h.t1 - 2.0).abs() < 1e-5);
-        assert!(RayBoxPrecomp::new(&r).intersect(&unit(), 0.0, 0.5).is_none());
+        assert!(RayBoxPrecomp::new(&r)
+            .intersect(&unit(), 0.0, 0.5)
+            .is_none());
         let r = Ray::new(Vec3::new(-1.0, 2.0, 0.5), Vec3::X);
-        assert!(RayBoxPrecomp::new(&r).intersect(&unit(), 0.0, f32::INFINITY).is_none());
+        assert!(RayBoxPrecomp::new(&r)
+            .intersect(&unit(), 0.0, f32::INFINITY)
+            .is_none());
     }
 
     #[test]
@@ -110,7 +123,10 @@ mod tests {
             let target = Vec3::new(c + u, c + 0.37, c);
             let o = target + Vec3::new(3.0, -2.0, 5.0);
             let r = Ray::new(o, (target - o).normalize());
-            if RayBoxPrecomp::new(&r).intersect(&b, 0.0, f32::INFINITY).is_none() {
+            if RayBoxPrecomp::new(&r)
+                .intersect(&b, 0.0, f32::INFINITY)
+                .is_none()
+            {
                 misses += 1;
             }
         }

@@ -77,7 +77,13 @@ pub fn nearest_root<R: Real>(h: &SphereHit<R>, t_min: R, t_max: R) -> Option<R> 
 /// (per component): `γ₅|p − c|` for the reprojection plus one rounding of the
 /// sum with the centre.
 #[inline]
-pub fn sphere_point_and_error<R: Real>(c: [R; 3], r: R, o: [R; 3], d: [R; 3], t: R) -> ([R; 3], [R; 3]) {
+pub fn sphere_point_and_error<R: Real>(
+    c: [R; 3],
+    r: R,
+    o: [R; 3],
+    d: [R; 3],
+    t: R,
+) -> ([R; 3], [R; 3]) {
     let mut pl = [
         o[0] + t * d[0] - c[0],
         o[1] + t * d[1] - c[1],
@@ -114,13 +120,16 @@ mod tests {
     use super::*;
 
     fn rng(seed: &mut u64) -> f64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
     }
 
     #[test]
     fn unit_sphere_head_on() {
-        let h = intersect_sphere([0.0f32, 0.0, 0.0], 1.0, [0.0, 0.0, -5.0], [0.0, 0.0, 1.0]).unwrap();
+        let h =
+            intersect_sphere([0.0f32, 0.0, 0.0], 1.0, [0.0, 0.0, -5.0], [0.0, 0.0, 1.0]).unwrap();
         assert_eq!((h.t0, h.t1), (4.0, 6.0));
         assert_eq!(nearest_root(&h, 0.0, f32::INFINITY), Some(4.0));
         assert_eq!(nearest_root(&h, 4.0, f32::INFINITY), Some(6.0));
@@ -129,7 +138,8 @@ mod tests {
 
     #[test]
     fn unnormalised_direction_keeps_parameterisation() {
-        let h = intersect_sphere([0.0f32, 0.0, 0.0], 1.0, [0.0, 0.0, -5.0], [0.0, 0.0, 2.0]).unwrap();
+        let h =
+            intersect_sphere([0.0f32, 0.0, 0.0], 1.0, [0.0, 0.0, -5.0], [0.0, 0.0, 2.0]).unwrap();
         assert_eq!((h.t0, h.t1), (2.0, 3.0));
     }
 
@@ -145,7 +155,8 @@ mod tests {
         for _ in 0..n {
             let (a, b) = (rng(&mut seed) * 2.0 - 1.0, rng(&mut seed) * 2.0 - 1.0);
             let target = [c[0] + 1.5 * a as f32, c[1] + 1.5 * b as f32, c[2]];
-            let len = (target[0] * target[0] + target[1] * target[1] + target[2] * target[2]).sqrt();
+            let len =
+                (target[0] * target[0] + target[1] * target[1] + target[2] * target[2]).sqrt();
             let d = [target[0] / len, target[1] / len, target[2] / len];
             let f = intersect_sphere(c, 1.0f32, [0.0; 3], d).is_some();
             let dd = d.map(|x| x as f64);
@@ -155,7 +166,10 @@ mod tests {
             }
         }
         // numerics.md: RTG-7 measured 8.5e-5 at 1e4 (textbook: 54 %).
-        assert!((mismatch as f64) / (n as f64) < 1e-3, "mismatch {mismatch}/{n}");
+        assert!(
+            (mismatch as f64) / (n as f64) < 1e-3,
+            "mismatch {mismatch}/{n}"
+        );
     }
 
     #[test]
@@ -164,17 +178,30 @@ mod tests {
         for _ in 0..10_000 {
             let c = [1e3f32, -2e3, 5e2];
             let o = [0.0f32, 0.0, 0.0];
-            let t = [c[0] + (rng(&mut seed) as f32 - 0.5), c[1] + (rng(&mut seed) as f32 - 0.5), c[2]];
+            let t = [
+                c[0] + (rng(&mut seed) as f32 - 0.5),
+                c[1] + (rng(&mut seed) as f32 - 0.5),
+                c[2],
+            ];
             let l = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
             let d = [t[0] / l, t[1] / l, t[2] / l];
-            let Some(h) = intersect_sphere(c, 1.0f32, o, d) else { continue };
-            let Some(tt) = nearest_root(&h, 0.0, f32::INFINITY) else { continue };
+            let Some(h) = intersect_sphere(c, 1.0f32, o, d) else {
+                continue;
+            };
+            let Some(tt) = nearest_root(&h, 0.0, f32::INFINITY) else {
+                continue;
+            };
             let (p, err) = sphere_point_and_error(c, 1.0f32, o, d, tt);
             // The reprojected f32 point must lie on the sphere within its bound.
             let pl: Vec<f64> = (0..3).map(|i| p[i] as f64 - c[i] as f64).collect();
             let dist = (pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]).sqrt();
             let e = (err[0] as f64).hypot(err[1] as f64).hypot(err[2] as f64);
-            assert!((dist - 1.0).abs() <= e, "off surface by {} > {}", (dist - 1.0).abs(), e);
+            assert!(
+                (dist - 1.0).abs() <= e,
+                "off surface by {} > {}",
+                (dist - 1.0).abs(),
+                e
+            );
         }
     }
 }

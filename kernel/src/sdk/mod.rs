@@ -143,6 +143,13 @@ impl Prepare<'_> {
         self.env.max_threads
     }
 
+    /// Read a whole file, telling the host (its `--stats` count the files read).
+    pub fn read_file(&self, path: &std::path::Path) -> std::io::Result<Vec<u8>> {
+        let s = path.to_string_lossy();
+        (self.env.note_file)(self.env.host, s.as_ptr(), s.len());
+        std::fs::read(path)
+    }
+
     /// Run `f(i)` for `i < n` on the host's thread pool (plugins must not start
     /// pools of their own). A panic in `f` is re-raised here after all tasks end.
     pub fn parallel_for<F: Fn(u64) + Sync>(&self, n: u64, f: F) {
@@ -235,8 +242,15 @@ pub struct PrimSet {
     this: *const c_void,
     count: extern "C" fn(*const c_void) -> u32,
     bounds: extern "C" fn(*const c_void, u32, u32, *mut Bounds3),
-    intersect:
-        extern "C" fn(*const c_void, *mut TraceCtx, *const Ray, *const u32, u32, *mut Hit, u32) -> bool,
+    intersect: extern "C" fn(
+        *const c_void,
+        *mut TraceCtx,
+        *const Ray,
+        *const u32,
+        u32,
+        *mut Hit,
+        u32,
+    ) -> bool,
     occluded: extern "C" fn(*const c_void, *mut TraceCtx, *const Ray, *const u32, u32, u32) -> bool,
 }
 
@@ -257,8 +271,23 @@ impl PrimSet {
     }
     /// Nearest hit among `ids`; writes `hit.stack[level]` as the child's `intersect` would.
     #[inline]
-    pub fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, ids: &[u32], hit: &mut Hit, level: u32) -> bool {
-        (self.intersect)(self.this, ctx, ray, ids.as_ptr(), ids.len() as u32, hit, level)
+    pub fn intersect(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        ids: &[u32],
+        hit: &mut Hit,
+        level: u32,
+    ) -> bool {
+        (self.intersect)(
+            self.this,
+            ctx,
+            ray,
+            ids.as_ptr(),
+            ids.len() as u32,
+            hit,
+            level,
+        )
     }
     /// Any hit among `ids`.
     #[inline]
@@ -339,7 +368,13 @@ impl<'a> Scene<'a> {
     }
     /// BSDF value of the bound material.
     #[inline]
-    pub fn bsdf_eval(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: glam::Vec3, wi: glam::Vec3) -> Color {
+    pub fn bsdf_eval(
+        &self,
+        ctx: &mut TraceCtx,
+        geom: &LocalGeom,
+        wo: glam::Vec3,
+        wi: glam::Vec3,
+    ) -> Color {
         (self.api.bsdf_eval)(self.api.host, ctx, geom, &wo.into(), &wi.into())
     }
     /// Sample the bound material.
@@ -483,7 +518,13 @@ pub trait Shader: Send + Sync + Sized + 'static {
         Color::BLACK
     }
     /// Sample an incident direction.
-    fn sample(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: glam::Vec3, u: [f32; 2]) -> Option<BsdfSample> {
+    fn sample(
+        &self,
+        ctx: &mut TraceCtx,
+        geom: &LocalGeom,
+        wo: glam::Vec3,
+        u: [f32; 2],
+    ) -> Option<BsdfSample> {
         let _ = (ctx, geom, wo, u);
         None
     }
@@ -543,7 +584,13 @@ pub trait Light: Send + Sync + Sized + 'static {
         let _ = world;
     }
     /// Sample incident light at `p`.
-    fn sample_li(&self, ctx: &mut TraceCtx, p: glam::Vec3, u: [f32; 2], time: f32) -> Option<LightSample>;
+    fn sample_li(
+        &self,
+        ctx: &mut TraceCtx,
+        p: glam::Vec3,
+        u: [f32; 2],
+        time: f32,
+    ) -> Option<LightSample>;
     /// Offer [`le`](Light::le) (environment lights).
     const HAS_LE: bool = false;
     /// Radiance of an escaping ray.

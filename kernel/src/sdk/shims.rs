@@ -5,7 +5,7 @@
 
 use super::*;
 use abi_stable::library::{
-    CheckTypeLayout, LibHeader, RootModule, RootModuleResult, __call_root_module_loader,
+    __call_root_module_loader, CheckTypeLayout, LibHeader, RootModule, RootModuleResult,
 };
 use abi_stable::prefix_type::PrefixTypeTrait;
 use abi_stable::std_types::RStr;
@@ -114,7 +114,11 @@ fn hot<D: Decl, R>(ctx: *mut TraceCtx, what: &str, fallback: R, f: impl FnOnce()
 /// # Safety
 /// `params` must point at `len` bytes and `env` at a valid [`CreateEnv`]
 /// whose strings are valid for the call.
-unsafe fn create_args<'a>(params: *const u8, len: usize, env: *const CreateEnv) -> (&'a str, Env<'a>) {
+unsafe fn create_args<'a>(
+    params: *const u8,
+    len: usize,
+    env: *const CreateEnv,
+) -> (&'a str, Env<'a>) {
     // SAFETY: guaranteed by the caller (the host's loader).
     let (bytes, env) = unsafe { (std::slice::from_raw_parts(params, len), &*env) };
     // SAFETY: as above; the strings come from Rust `&str`s in the host.
@@ -157,7 +161,9 @@ fn create_with<D: Decl, T>(
 extern "C" fn destroy<T>(this: *mut c_void) {
     if !this.is_null() {
         // SAFETY: `this` came from `Box::into_raw` in `create` and is destroyed once.
-        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(this as *mut T) })));
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            drop(unsafe { Box::from_raw(this as *mut T) })
+        }));
     }
 }
 
@@ -238,7 +244,11 @@ extern "C" fn obj_add_child<T: Object, D: Decl>(
     })
 }
 
-extern "C" fn obj_prepare<T: Object, D: Decl>(this: *mut c_void, env: *const PrepareEnv, sink: ErrSink) -> i32 {
+extern "C" fn obj_prepare<T: Object, D: Decl>(
+    this: *mut c_void,
+    env: *const PrepareEnv,
+    sink: ErrSink,
+) -> i32 {
     cold::<D>(&sink, "prepare", || {
         // SAFETY: the host passes the live object, exclusively, and a valid environment.
         let (me, env) = unsafe { (&mut *(this as *mut T), &*env) };
@@ -286,7 +296,12 @@ extern "C" fn obj_local_geom<T: Object, D: Decl>(
     })
 }
 
-extern "C" fn obj_bounds<T: Object, D: Decl>(this: *const c_void, t0: f32, t1: f32, out: *mut Bounds3) {
+extern "C" fn obj_bounds<T: Object, D: Decl>(
+    this: *const c_void,
+    t0: f32,
+    t1: f32,
+    out: *mut Bounds3,
+) {
     let r = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: the caller passes the live object.
         unsafe { obj::<T>(this) }.bounds(t0, t1)
@@ -351,10 +366,20 @@ extern "C" fn obj_prim_count<T: Object, D: Decl>(this: *const c_void) -> u32 {
     catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.prim_count())).unwrap_or(0)
 }
 
-extern "C" fn obj_prim_bounds<T: Object, D: Decl>(this: *const c_void, first: u32, n: u32, out: *mut Bounds3) {
+extern "C" fn obj_prim_bounds<T: Object, D: Decl>(
+    this: *const c_void,
+    first: u32,
+    n: u32,
+    out: *mut Bounds3,
+) {
     let _ = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: the caller passes the live object and room for `n` boxes.
-        let (me, out) = unsafe { (obj::<T>(this), std::slice::from_raw_parts_mut(out, n as usize)) };
+        let (me, out) = unsafe {
+            (
+                obj::<T>(this),
+                std::slice::from_raw_parts_mut(out, n as usize),
+            )
+        };
         me.prim_bounds(first, out)
     }));
 }
@@ -412,7 +437,12 @@ pub(super) fn parallel_for<F: Fn(u64) + Sync>(env: &PrepareEnv, n: u64, f: F) {
         f: &f,
         panicked: AtomicBool::new(false),
     };
-    (env.parallel_for)(env.host, n, ParallelBody { func: body::<F> }, &job as *const Job<F> as *const c_void);
+    (env.parallel_for)(
+        env.host,
+        n,
+        ParallelBody { func: body::<F> },
+        &job as *const Job<F> as *const c_void,
+    );
     if job.panicked.load(Ordering::Relaxed) {
         panic!("a parallel_for task panicked");
     }

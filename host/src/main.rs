@@ -1,0 +1,266 @@
+//! `rtk`: render TOML scenes with plugin object classes, shaders, integrators,
+//! cameras and lights.
+
+mod output;
+mod render;
+mod tracer;
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+use rtk_kernel::abi::{geom_mask, ray_kind, Stats};
+use rtk_shell::{Parallel, PluginPath, Registry};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(
+    name = "rtk",
+    version,
+    about = "A ray tracer built on Kirk and Arvo's ray tracing kernel: every object class, shader, integrator, camera and light is a plugin."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to PNG (sRGB) or EXR (linear).
+    Render(RenderArgs),
+    /// List every plugin on the plugin path with its kind and parameters.
+    Plugins {
+        /// Extra folders to search first (repeatable).
+        #[arg(long = "plugin-path", value_name = "DIR")]
+        plugin_path: Vec<PathBuf>,
+        /// Print only class, kind and file, not each plugin's documentation.
+        #[arg(long)]
+        short: bool,
+    },
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// The scene file (TOML).
+    scene: PathBuf,
+    /// Output image: .png (8-bit sRGB) or .exr (linear float). Default:
+    /// `[render] output`, else the scene's name with .png, in the current folder.
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
+    /// Samples per pixel (same as --set render.spp=N).
+    #[arg(long, value_name = "N")]
+    spp: Option<u32>,
+    /// Rendering threads (default: all cores). The image is identical for any count.
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Override a scene value, e.g. --set render.width=256 --set objects.ball.radius=2 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Print statistics (timings, rays by kind, plugins, objects) as JSON on stdout.
+    #[arg(long)]
+    stats: bool,
+    /// Extra folders to search for plugins first (repeatable).
+    #[arg(long = "plugin-path", value_name = "DIR")]
+    plugin_path: Vec<PathBuf>,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn main() {
+    let start = Instant::now();
+    let cli = Cli::parse();
+    let res = match cli.command {
+        Command::Render(a) => cmd_render(a, start),
+        Command::Plugins { plugin_path, short } => cmd_plugins(&plugin_path, short),
+    };
+    if let Err(e) = res {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+struct Pool<'a>(&'a rayon::ThreadPool);
+
+impl Parallel for Pool<'_> {
+    fn max_threads(&self) -> u32 {
+        self.0.current_num_threads() as u32
+    }
+    fn run(&self, n: u64, f: &(dyn Fn(u64) + Sync)) {
+        use rayon::prelude::*;
+        self.0.install(|| (0..n).into_par_iter().for_each(f));
+    }
+}
+
+fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
+    let threads = a
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if threads == 0 {
+        bail!("--threads must be at least 1");
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(|i| format!("rtk-render-{i}"))
+        .build()
+        .context("starting the thread pool")?;
+    let mut sets = a.set.clone();
+    if let Some(spp) = a.spp {
+        sets.push(format!("render.spp={spp}"));
+    }
+
+    let t_parse = Instant::now();
+    let mut file = rtk_shell::SceneFile::read(&a.scene)?;
+    file.apply_overrides(&sets)?;
+    let desc = rtk_shell::Desc::from_file(&file)?;
+    let parse_time = t_parse.elapsed();
+
+    let out = match (&a.output, &desc.render.output) {
+        (Some(o), _) => o.clone(),
+        (None, Some(o)) => PathBuf::from(o),
+        (None, None) => PathBuf::from(format!(
+            "{}.png",
+            a.scene
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "render".into())
+        )),
+    };
+    output::check_writable(&out)?;
+
+    let mut registry = Registry::new(PluginPath::standard(&a.plugin_path));
+    let world = rtk_shell::build(&file, desc, &mut registry, &Pool(&pool))?;
+
+    let tracer = tracer::Tracer::new(&world);
+    let t_render = Instant::now();
+    let film = render::render(&tracer, &pool, !a.quiet)
+        .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", a.scene.display()))?;
+    let render_time = t_render.elapsed();
+    let t_write = Instant::now();
+    output::write(&film, &out)?;
+    let write_time = t_write.elapsed();
+
+    if a.stats {
+        let s = &film.stats;
+        let mapped = mapped_plugins();
+        let json = serde_json::json!({
+            "scene": a.scene.display().to_string(),
+            "output": out.display().to_string(),
+            "width": film.width,
+            "height": film.height,
+            "spp": world.desc.render.spp,
+            "threads": threads,
+            "seconds": {
+                "parse": parse_time.as_secs_f64(),
+                "load_plugins": world.timings.load_plugins.as_secs_f64(),
+                "create": world.timings.create.as_secs_f64(),
+                "prepare": world.timings.prepare.as_secs_f64(),
+                "render": render_time.as_secs_f64(),
+                "write": write_time.as_secs_f64(),
+                "total": start.elapsed().as_secs_f64(),
+            },
+            "plugins_loaded": world.plugins.iter().map(|p| p.class.clone()).collect::<Vec<_>>(),
+            "plugins_mapped": mapped,
+            "objects_created": world.objects_created(),
+            "shaders_created": world.shaders.len(),
+            "lights": world.lights.len(),
+            "files_read": world.files_read,
+            "rays": rays_json(s),
+            "local_geom": {
+                "calls": s.local_geom_calls,
+                "position": s.local_geom_fields[bit(geom_mask::POSITION)],
+                "geometric_normal": s.local_geom_fields[bit(geom_mask::GEOMETRIC_NORMAL)],
+                "shading_normal": s.local_geom_fields[bit(geom_mask::SHADING_NORMAL)],
+                "tangents": s.local_geom_fields[bit(geom_mask::TANGENTS)],
+                "uv": s.local_geom_fields[bit(geom_mask::UV)],
+            },
+            "node_tests": s.node_tests,
+            "prim_tests": s.prim_tests,
+            "shader_calls": s.shader_calls,
+            "light_samples": s.light_samples,
+            "nonfinite_samples": s.nonfinite_samples,
+        });
+        println!("{}", serde_json::to_string_pretty(&json)?);
+    }
+    if !a.quiet {
+        eprintln!(
+            "wrote {} ({}x{}, {} spp) in {:.2} s",
+            out.display(),
+            film.width,
+            film.height,
+            world.desc.render.spp,
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+fn bit(mask: u32) -> usize {
+    mask.trailing_zeros() as usize
+}
+
+fn rays_json(s: &Stats) -> serde_json::Value {
+    serde_json::json!({
+        "camera": s.rays[ray_kind::CAMERA as usize],
+        "reflection": s.rays[ray_kind::REFLECTION as usize],
+        "refraction": s.rays[ray_kind::REFRACTION as usize],
+        "shadow": s.rays[ray_kind::SHADOW as usize],
+        "scatter": s.rays[ray_kind::SCATTER as usize],
+    })
+}
+
+/// The rtk plugin libraries actually mapped into this process, read from
+/// the OS (Linux), not from the loader's own bookkeeping.
+fn mapped_plugins() -> Vec<String> {
+    let Ok(maps) = std::fs::read_to_string("/proc/self/maps") else {
+        return vec![];
+    };
+    let prefix = format!("{}rtk_", std::env::consts::DLL_PREFIX);
+    let mut out: Vec<String> = maps
+        .lines()
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .filter(|p| {
+            Path::new(p)
+                .file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| {
+                    n.starts_with(&prefix) && n.ends_with(std::env::consts::DLL_SUFFIX)
+                })
+        })
+        .map(str::to_string)
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+fn cmd_plugins(extra: &[PathBuf], short: bool) -> Result<()> {
+    let path = PluginPath::standard(extra);
+    println!("plugin path (first match wins):");
+    for d in &path.dirs {
+        println!("  {}", d.display());
+    }
+    let avail = path.available();
+    if avail.is_empty() {
+        println!("\nno plugins found");
+        return Ok(());
+    }
+    for (class, file) in avail {
+        match rtk_shell::plugins::load(&file, Some(&class)) {
+            Ok(p) => {
+                println!(
+                    "\n{class}  [{}]  v{}  {}",
+                    p.kind.name(),
+                    p.version,
+                    file.display()
+                );
+                if !short {
+                    for l in p.doc.lines() {
+                        println!("    {l}");
+                    }
+                }
+            }
+            Err(e) => println!("\n{class}  [refused]  {e}"),
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,105 @@
+//! Image output: PNG (8-bit sRGB) and OpenEXR (linear f32), written to a
+//! temporary file beside the target and renamed into place, so that a failed
+//! or interrupted run never leaves a half-written image.
+
+use crate::render::Film;
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+
+/// Output formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit sRGB PNG.
+    Png,
+    /// Linear 32-bit float OpenEXR.
+    Exr,
+}
+
+/// The format an output path asks for (checked before rendering).
+pub fn format_of(path: &Path) -> Result<Format> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("png") => Ok(Format::Png),
+        Some("exr") => Ok(Format::Exr),
+        _ => bail!(
+            "output {}: the file name must end in .png or .exr",
+            path.display()
+        ),
+    }
+}
+
+/// Check that the output's folder exists (before spending time rendering).
+pub fn check_writable(path: &Path) -> Result<()> {
+    format_of(path)?;
+    let dir = parent(path);
+    if !dir.is_dir() {
+        bail!(
+            "output {}: the folder {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn parent(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Linear to sRGB-encoded 8-bit.
+pub fn srgb8(v: f64) -> u8 {
+    let v = if v.is_finite() {
+        v.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let e = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (e * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// Write the film atomically.
+pub fn write(film: &Film, path: &Path) -> Result<()> {
+    let fmt = format_of(path)?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let tmp = parent(path).join(format!(".{name}.{}.tmp", std::process::id()));
+    let res = (|| -> Result<()> {
+        match fmt {
+            Format::Png => {
+                let data: Vec<u8> = film.pixels.iter().flat_map(|p| p.map(srgb8)).collect();
+                let img = image::RgbImage::from_raw(film.width, film.height, data)
+                    .context("image size")?;
+                img.save_with_format(&tmp, image::ImageFormat::Png)?;
+            }
+            Format::Exr => {
+                let data: Vec<f32> = film
+                    .pixels
+                    .iter()
+                    .flat_map(|p| p.map(|v| v as f32))
+                    .collect();
+                let img = image::Rgb32FImage::from_raw(film.width, film.height, data)
+                    .context("image size")?;
+                img.save_with_format(&tmp, image::ImageFormat::OpenExr)?;
+            }
+        }
+        std::fs::rename(&tmp, path)?;
+        Ok(())
+    })();
+    if res.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    res.with_context(|| format!("writing {}", path.display()))
+}

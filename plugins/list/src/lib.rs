@@ -1,0 +1,69 @@
+#![doc = include_str!("../README.md")]
+
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::*;
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {}
+
+struct List {
+    children: Vec<Child>,
+}
+
+impl Object for List {
+    type Params = Params;
+
+    fn create(_p: Params, _env: &Env) -> Result<Self, PluginError> {
+        Ok(List {
+            children: Vec::new(),
+        })
+    }
+
+    fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
+        self.children.push(child);
+        Ok(())
+    }
+
+    fn bounds(&self, t0: f32, t1: f32) -> Bounds3 {
+        self.children
+            .iter()
+            .fold(Bounds3::EMPTY, |b, c| b.union(c.bounds(t0, t1)))
+    }
+
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
+        // Narrow t_max as hits are found; a later child must be strictly
+        // closer, so ties go to the lowest index.
+        let mut r = *ray;
+        let mut found = false;
+        for (i, c) in self.children.iter().enumerate() {
+            if c.intersect(ctx, &r, hit, level + 1) {
+                r.t_max = hit.t;
+                hit.record_child(level, i as u32);
+                found = true;
+            }
+        }
+        found
+    }
+
+    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, level: u32) -> bool {
+        self.children
+            .iter()
+            .any(|c| c.occluded(ctx, ray, level + 1))
+    }
+
+    fn local_geom(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        hit: &Hit,
+        level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        let i = hit.entry(level).index as usize;
+        self.children[i].local_geom(ctx, ray, hit, level + 1, mask, out);
+    }
+}
+
+rtk_kernel::export_object!(List, class = "list", doc = include_str!("../README.md"));

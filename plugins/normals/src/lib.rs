@@ -1,0 +1,38 @@
+#![doc = include_str!("../README.md")]
+
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::*;
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {}
+
+struct Normals;
+
+impl Integrator for Normals {
+    type Params = Params;
+
+    fn create(_p: Params, _env: &Env) -> Result<Self, PluginError> {
+        Ok(Normals)
+    }
+
+    fn max_depth(&self) -> u32 {
+        0
+    }
+
+    fn li(&self, ctx: &mut TraceCtx, scene: &Scene, ray: &Ray) -> Color {
+        let mut hit = Hit::new();
+        if !scene.intersect(ctx, ray, ray_kind::TRACED, &mut hit) {
+            return scene.background(ray);
+        }
+        let g = scene.local_geom(ctx, ray, &hit, geom_mask::SHADING_NORMAL);
+        let n = g.ns.v();
+        Color::new(0.5 * (n.x + 1.0), 0.5 * (n.y + 1.0), 0.5 * (n.z + 1.0))
+    }
+}
+
+rtk_kernel::export_integrator!(
+    Normals,
+    class = "normals",
+    doc = include_str!("../README.md")
+);

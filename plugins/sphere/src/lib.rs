@@ -1,0 +1,161 @@
+#![doc = include_str!("../README.md")]
+
+use rtk_kernel::geom::{intersect_sphere, nearest_root, sphere_point_and_error};
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::*;
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {
+    #[serde(default)]
+    center: [f32; 3],
+    #[serde(default = "one")]
+    radius: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+struct Sphere {
+    c: Vec3,
+    r: f32,
+}
+
+impl Sphere {
+    #[inline]
+    fn root(&self, ray: &Ray) -> Option<f32> {
+        let h = intersect_sphere(
+            self.c.to_array(),
+            self.r,
+            ray.origin.to_array(),
+            ray.dir.to_array(),
+        )?;
+        nearest_root(&h, ray.t_min, ray.t_max)
+    }
+}
+
+impl Object for Sphere {
+    type Params = Params;
+
+    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+        check_finite("center", &p.center)?;
+        if !p.radius.is_finite() || p.radius <= 0.0 {
+            return Err(PluginError::key(
+                "radius",
+                format!("must be a positive number, got {}", p.radius),
+            ));
+        }
+        if p.radius < f32::MIN_POSITIVE || p.radius > 1e12 {
+            return Err(PluginError::key(
+                "radius",
+                format!("{} is outside the range f32 handles", p.radius),
+            ));
+        }
+        Ok(Sphere {
+            c: Vec3::from(p.center),
+            r: p.radius,
+        })
+    }
+
+    fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
+        Bounds3::new(self.c - Vec3::splat(self.r), self.c + Vec3::splat(self.r))
+    }
+
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
+        ctx.stats.prim_tests += 1;
+        match self.root(ray) {
+            Some(t) => {
+                hit.record_leaf(level, t, 0, [0.0, 0.0]);
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, _level: u32) -> bool {
+        ctx.stats.prim_tests += 1;
+        self.root(ray).is_some()
+    }
+
+    fn local_geom(
+        &self,
+        _ctx: &mut TraceCtx,
+        ray: &Ray,
+        hit: &Hit,
+        _level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        let (p, err) = sphere_point_and_error(
+            self.c.to_array(),
+            self.r,
+            ray.origin.to_array(),
+            ray.dir.to_array(),
+            hit.t,
+        );
+        let p = Vec3::from(p);
+        let n = ((p - self.c) / self.r).normalize_or(Vec3::Z);
+        out.p = p.into();
+        out.p_err = Vec3::from(err).into();
+        out.ng = n.into();
+        out.ns = n.into();
+        out.filled |= geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL;
+        if mask & (geom_mask::UV | geom_mask::TANGENTS) != 0 {
+            // u = phi / 2pi around +y, v = theta / pi from +y.
+            let phi = n.z.atan2(n.x).rem_euclid(std::f32::consts::TAU);
+            let theta = n.y.clamp(-1.0, 1.0).acos();
+            out.uv = [phi / std::f32::consts::TAU, theta / std::f32::consts::PI];
+            let dpdu = Vec3::new(-n.z, 0.0, n.x) * (std::f32::consts::TAU * self.r);
+            let dpdu = if dpdu.length_squared() > 0.0 {
+                dpdu
+            } else {
+                n.any_orthonormal_vector()
+            };
+            let dpdv = n.cross(dpdu).normalize_or(Vec3::X) * (std::f32::consts::PI * self.r);
+            out.dpdu = dpdu.into();
+            out.dpdv = dpdv.into();
+            out.filled |= geom_mask::UV | geom_mask::TANGENTS;
+        }
+    }
+
+    const HAS_BOUNDING_SPHERE: bool = true;
+    fn bounding_sphere(&self, _t0: f32, _t1: f32) -> BoundingSphere {
+        BoundingSphere {
+            center: self.c.into(),
+            radius: self.r,
+        }
+    }
+
+    const HAS_INTERIOR: bool = true;
+    fn in_interior(&self, _ctx: &mut TraceCtx, p: Float3, _time: f32) -> bool {
+        (p.v() - self.c).length_squared() < self.r * self.r
+    }
+
+    const HAS_SURFACE_SAMPLING: bool = true;
+    fn sample_surface(
+        &self,
+        _ctx: &mut TraceCtx,
+        u: [f32; 3],
+        _time: f32,
+    ) -> Option<SurfaceSample> {
+        let z = 1.0 - 2.0 * u[0];
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * u[1];
+        let n = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let p = self.c + n * self.r;
+        let err = rtk_kernel::geom::gamma::<f32>(5) * (p.abs() + self.c.abs());
+        Some(SurfaceSample {
+            p: p.into(),
+            p_err: err.into(),
+            n: n.into(),
+            pdf_area: 1.0 / self.area(0.0),
+        })
+    }
+    fn area(&self, _time: f32) -> f32 {
+        4.0 * std::f32::consts::PI * self.r * self.r
+    }
+}
+
+rtk_kernel::export_object!(Sphere, class = "sphere", doc = include_str!("../README.md"));

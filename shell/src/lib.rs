@@ -1,0 +1,40 @@
+//! # rtk-shell
+//!
+//! Reads a TOML scene and builds the object DAG through the paper's open,
+//! create, instance and close steps, loading only the plugin libraries the
+//! objects reachable from the root need.
+//!
+//! - [`desc`]: the scene file read, overridden (`--set`) and checked with
+//!   errors that name file, line, column, object and key;
+//! - [`plugins`]: the plugin path and the loader, which refuses a library
+//!   built against another kernel, built with `panic = "abort"`, or that is no
+//!   rtk plugin at all, before any of its code runs;
+//! - [`build`]: creation of the DAG and the [`World`] the renderer uses.
+//!
+//! The shell never links a plugin: it knows object classes only through the
+//! kernel's records.
+#![deny(missing_docs)]
+
+pub mod build;
+pub mod desc;
+pub mod error;
+pub mod plugins;
+pub mod tree;
+
+pub use build::{build, Created, Parallel, Sequential, Timings, World};
+pub use desc::{Desc, SceneFile};
+pub use error::{ErrorKind, SceneError};
+pub use plugins::{PluginPath, Registry};
+
+/// Read a scene file, apply `--set` overrides, check it, and build it.
+pub fn load(
+    path: &std::path::Path,
+    sets: &[String],
+    registry: &mut Registry,
+    parallel: &dyn Parallel,
+) -> Result<World, SceneError> {
+    let mut file = SceneFile::read(path)?;
+    file.apply_overrides(sets)?;
+    let desc = Desc::from_file(&file)?;
+    build(&file, desc, registry, parallel)
+}

@@ -1,0 +1,341 @@
+//! A TOML document as a tree of values that remember where they came from,
+//! so that every error — the shell's own or a plugin's, by key path — names
+//! the file, line and column.
+
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::Deserialize;
+use std::ops::Range;
+use toml::Spanned;
+
+/// Where a value came from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Origin {
+    /// A byte range of the scene file.
+    File(Range<usize>),
+    /// A `--set key=value` on the command line.
+    CommandLine(String),
+}
+
+/// A value with its origin.
+#[derive(Debug, Clone)]
+pub struct Node {
+    /// Where it came from.
+    pub origin: Origin,
+    /// The value.
+    pub value: Val,
+}
+
+/// TOML values. Tables keep their keys' order and the keys' own origins.
+#[derive(Debug, Clone)]
+pub enum Val {
+    /// A string.
+    Str(String),
+    /// An integer.
+    Int(i64),
+    /// A float (possibly `nan` or `inf`: rejected where numbers are used).
+    Float(f64),
+    /// A boolean.
+    Bool(bool),
+    /// A date-time (not used by rtk; rejected where it appears).
+    Datetime,
+    /// An array.
+    Arr(Vec<Node>),
+    /// A table: (key, key origin, value).
+    Table(Vec<(String, Origin, Node)>),
+}
+
+impl Val {
+    /// Human name of the type, for messages.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Val::Str(_) => "a string",
+            Val::Int(_) => "an integer",
+            Val::Float(_) => "a float",
+            Val::Bool(_) => "a boolean",
+            Val::Datetime => "a date-time",
+            Val::Arr(_) => "an array",
+            Val::Table(_) => "a table",
+        }
+    }
+}
+
+impl Node {
+    /// Look up a key of a table.
+    pub fn get(&self, key: &str) -> Option<&Node> {
+        match &self.value {
+            Val::Table(t) => t.iter().find(|(k, _, _)| k == key).map(|(_, _, v)| v),
+            _ => None,
+        }
+    }
+
+    /// The origin of a key of a table (the key itself, for "unknown key" errors).
+    pub fn key_origin(&self, key: &str) -> Option<&Origin> {
+        match &self.value {
+            Val::Table(t) => t.iter().find(|(k, _, _)| k == key).map(|(_, o, _)| o),
+            _ => None,
+        }
+    }
+
+    /// Follow a key path such as `center[1]` or `a.b[0].c`; returns the deepest
+    /// node reached (the error is at or inside it).
+    pub fn locate(&self, path: &str) -> &Node {
+        let mut cur = self;
+        for seg in split_path(path) {
+            let next = match (&cur.value, seg) {
+                (Val::Table(_), Seg::Key(k)) => cur.get(k),
+                (Val::Arr(a), Seg::Index(i)) => a.get(i),
+                _ => None,
+            };
+            match next {
+                Some(n) => cur = n,
+                None => break,
+            }
+        }
+        cur
+    }
+
+    /// The origin of the key path's last key when it exists as a key, else the
+    /// deepest node's origin (so "unknown key" points at the key).
+    pub fn locate_origin(&self, path: &str) -> Origin {
+        let segs: Vec<Seg> = split_path(path).collect();
+        if let Some((Seg::Key(last), init)) = segs.split_last() {
+            let parent_path = join_path(init);
+            let parent = self.locate(&parent_path);
+            if let Some(o) = parent.key_origin(last) {
+                return o.clone();
+            }
+        }
+        self.locate(path).origin.clone()
+    }
+
+    /// Set `path` (dotted keys) to `value`, creating tables on the way.
+    pub fn set_path(&mut self, keys: &[&str], value: Node) -> Result<(), String> {
+        let Some((first, rest)) = keys.split_first() else {
+            *self = value;
+            return Ok(());
+        };
+        let origin = value.origin.clone();
+        let Val::Table(t) = &mut self.value else {
+            return Err(format!(
+                "`{first}` is inside {}, not a table",
+                self.value.type_name()
+            ));
+        };
+        if let Some(pos) = t.iter().position(|(k, _, _)| k == first) {
+            return t[pos].2.set_path(rest, value);
+        }
+        let mut child = Node {
+            origin: origin.clone(),
+            value: Val::Table(Vec::new()),
+        };
+        child.set_path(rest, value)?;
+        t.push((first.to_string(), origin, child));
+        Ok(())
+    }
+}
+
+enum Seg<'a> {
+    Key(&'a str),
+    Index(usize),
+}
+
+fn split_path(path: &str) -> impl Iterator<Item = Seg<'_>> {
+    path.split('.').filter(|s| !s.is_empty()).flat_map(|part| {
+        let mut out = Vec::new();
+        let (key, mut rest) = match part.find('[') {
+            Some(i) => (&part[..i], &part[i..]),
+            None => (part, ""),
+        };
+        if !key.is_empty() {
+            out.push(Seg::Key(key));
+        }
+        while let Some(end) = rest.find(']') {
+            if let Ok(i) = rest[1..end].parse() {
+                out.push(Seg::Index(i));
+            }
+            rest = &rest[end + 1..];
+        }
+        out
+    })
+}
+
+fn join_path(segs: &[Seg]) -> String {
+    let mut s = String::new();
+    for seg in segs {
+        match seg {
+            Seg::Key(k) => {
+                if !s.is_empty() {
+                    s.push('.');
+                }
+                s.push_str(k);
+            }
+            Seg::Index(i) => s.push_str(&format!("[{i}]")),
+        }
+    }
+    s
+}
+
+impl<'de> Deserialize<'de> for Node {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s: Spanned<Val> = Spanned::deserialize(d)?;
+        Ok(Node {
+            origin: Origin::File(s.span()),
+            value: s.into_inner(),
+        })
+    }
+}
+
+impl<'de> Deserialize<'de> for Val {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(ValVisitor)
+    }
+}
+
+struct ValVisitor;
+
+impl<'de> Visitor<'de> for ValVisitor {
+    type Value = Val;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a TOML value")
+    }
+    fn visit_bool<E>(self, v: bool) -> Result<Val, E> {
+        Ok(Val::Bool(v))
+    }
+    fn visit_i64<E>(self, v: i64) -> Result<Val, E> {
+        Ok(Val::Int(v))
+    }
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Val, E> {
+        i64::try_from(v)
+            .map(Val::Int)
+            .map_err(|_| E::custom("integer too large"))
+    }
+    fn visit_f64<E>(self, v: f64) -> Result<Val, E> {
+        Ok(Val::Float(v))
+    }
+    fn visit_str<E>(self, v: &str) -> Result<Val, E> {
+        Ok(Val::Str(v.to_string()))
+    }
+    fn visit_string<E>(self, v: String) -> Result<Val, E> {
+        Ok(Val::Str(v))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Val, A::Error> {
+        let mut out = Vec::new();
+        while let Some(n) = seq.next_element::<Node>()? {
+            out.push(n);
+        }
+        Ok(Val::Arr(out))
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Val, A::Error> {
+        let mut out = Vec::new();
+        while let Some(k) = map.next_key::<Spanned<String>>()? {
+            let span = k.span();
+            let key = k.into_inner();
+            if key.starts_with("$__toml_private") {
+                // A date-time arrives as a one-key map: consume and mark it.
+                let _ = map.next_value::<de::IgnoredAny>()?;
+                return Ok(Val::Datetime);
+            }
+            let v = map.next_value::<Node>()?;
+            out.push((key, Origin::File(span), v));
+        }
+        Ok(Val::Table(out))
+    }
+}
+
+/// Parse a TOML document. On a syntax error returns the message and the byte
+/// range it concerns.
+pub fn parse(src: &str) -> Result<Node, (String, Option<Range<usize>>)> {
+    let val: Val = toml::from_str(src).map_err(|e| (e.message().to_string(), e.span()))?;
+    Ok(Node {
+        origin: Origin::File(0..src.len()),
+        value: val,
+    })
+}
+
+/// Parse the value of a `--set key=value`: TOML syntax (`4`, `[1, 2]`,
+/// `"text"`), or a bare word taken as a string.
+pub fn parse_override_value(expr: &str, text: &str) -> Node {
+    let origin = Origin::CommandLine(expr.to_string());
+    let value = match toml::from_str::<Val>(&format!("v = {text}")) {
+        Ok(Val::Table(mut t)) if t.len() == 1 => t
+            .pop()
+            .map(|(_, _, n)| n.value)
+            .unwrap_or(Val::Str(text.into())),
+        _ => Val::Str(text.to_string()),
+    };
+    let mut n = Node {
+        origin: origin.clone(),
+        value,
+    };
+    reorigin(&mut n, &origin);
+    n
+}
+
+fn reorigin(n: &mut Node, o: &Origin) {
+    n.origin = o.clone();
+    match &mut n.value {
+        Val::Arr(a) => a.iter_mut().for_each(|c| reorigin(c, o)),
+        Val::Table(t) => t.iter_mut().for_each(|(_, ko, c)| {
+            *ko = o.clone();
+            reorigin(c, o)
+        }),
+        _ => {}
+    }
+}
+
+/// Line and column (1-based, columns in characters) of a byte offset.
+pub fn line_col(src: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(src.len());
+    let before = &src[..offset];
+    let line = before.matches('\n').count() + 1;
+    let col = before
+        .rsplit('\n')
+        .next()
+        .map(|l| l.chars().count())
+        .unwrap_or(0)
+        + 1;
+    (line, col)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spans_and_paths() {
+        let src = "[objects.ball]\nclass = \"sphere\"\ncenter = [1.0, 2.0, nan]\n";
+        let root = parse(src).unwrap();
+        let ball = root.get("objects").unwrap().get("ball").unwrap();
+        let n = ball.locate("center[2]");
+        assert!(matches!(n.value, Val::Float(f) if f.is_nan()));
+        let Origin::File(r) = &n.origin else { panic!() };
+        assert_eq!(line_col(src, r.start), (3, 21));
+        let Origin::File(k) = ball.locate_origin("class") else {
+            panic!()
+        };
+        assert_eq!(line_col(src, k.start), (2, 1));
+    }
+
+    #[test]
+    fn overrides() {
+        let mut root = parse("[render]\nspp = 1\n").unwrap();
+        root.set_path(
+            &["render", "spp"],
+            parse_override_value("render.spp=16", "16"),
+        )
+        .unwrap();
+        assert!(matches!(
+            root.get("render").unwrap().get("spp").unwrap().value,
+            Val::Int(16)
+        ));
+        let v = parse_override_value("render.camera=main", "main");
+        assert!(matches!(v.value, Val::Str(ref s) if s == "main"));
+    }
+
+    #[test]
+    fn syntax_error_has_span() {
+        let (msg, span) = parse("[render]\nwidth = = 3\n").unwrap_err();
+        assert!(!msg.is_empty());
+        assert!(span.is_some());
+    }
+}
