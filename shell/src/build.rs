@@ -538,18 +538,22 @@ impl Builder<'_> {
             }
             _ => (&def.node, def.path()),
         };
+        // An unknown key points at the key; any other error at the value.
         let origin = if c.key.is_empty() {
             def.class_origin.clone()
-        } else {
+        } else if c.msg.starts_with("unknown field") {
             node.locate_origin(&c.key)
+        } else {
+            node.locate(&c.key).origin.clone()
         };
-        self.file.err(
-            ErrorKind::PluginCall,
-            &origin,
-            &object,
-            &c.key,
-            format!("plugin `{class}` refused {what}: {}", c.msg),
-        )
+        // A panic's message already names the plugin and the entry point.
+        let msg = if c.msg.starts_with("plugin '") {
+            c.msg.clone()
+        } else {
+            format!("plugin `{class}` refused {what}: {}", c.msg)
+        };
+        self.file
+            .err(ErrorKind::PluginCall, &origin, &object, &c.key, msg)
     }
 
     fn create_other<M: Copy>(

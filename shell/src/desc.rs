@@ -473,14 +473,14 @@ impl Ctx<'_> {
     }
 
     fn transform(&self, n: &Node, path: &str) -> Result<DAffine3, SceneError> {
-        let steps =
-            match &n.value {
-                Val::Arr(_) => n.clone(),
-                Val::Table(_) => Node {
-                    origin: n.origin.clone(),
-                    value: Val::Arr(vec![n.clone()]),
-                },
-                v => return Err(self.err(
+        let steps = match &n.value {
+            Val::Arr(_) => n.clone(),
+            Val::Table(_) => Node {
+                origin: n.origin.clone(),
+                value: Val::Arr(vec![n.clone()]),
+            },
+            v => {
+                return Err(self.err(
                     &n.origin,
                     path,
                     "transform",
@@ -488,8 +488,9 @@ impl Ctx<'_> {
                         "expected a list of steps such as [{{ translate = [1, 0, 0] }}], found {}",
                         v.type_name()
                     ),
-                )),
-            };
+                ))
+            }
+        };
         let json = self.json(&steps, path, "transform")?;
         let parsed: Vec<xform::Step> = match rtk_kernel::parse_params(&json.to_string()) {
             Ok(s) => s,
@@ -622,23 +623,23 @@ impl Desc {
         let height = int("height", 384, 1, 65536)? as u32;
         let spp = int("spp", 1, 1, 1 << 24)? as u32;
         let seed = int("seed", 0, 0, i64::MAX)? as u64;
-        let (camera, camera_origin) =
-            match r.get("camera") {
-                Some(n) => (cx.string(n, obj, "camera")?, n.origin.clone()),
-                None => match cameras.len() {
-                    1 => (
-                        cameras.keys().next().cloned().unwrap_or_default(),
-                        r.origin.clone(),
-                    ),
-                    0 => {
-                        return Err(cx.err(
-                            &r.origin,
-                            obj,
-                            "camera",
-                            "the scene defines no camera: add a [cameras.NAME] table",
-                        ))
-                    }
-                    _ => return Err(cx.err(
+        let (camera, camera_origin) = match r.get("camera") {
+            Some(n) => (cx.string(n, obj, "camera")?, n.origin.clone()),
+            None => match cameras.len() {
+                1 => (
+                    cameras.keys().next().cloned().unwrap_or_default(),
+                    r.origin.clone(),
+                ),
+                0 => {
+                    return Err(cx.err(
+                        &r.origin,
+                        obj,
+                        "camera",
+                        "the scene defines no camera: add a [cameras.NAME] table",
+                    ))
+                }
+                _ => {
+                    return Err(cx.err(
                         &r.origin,
                         obj,
                         "camera",
@@ -646,9 +647,10 @@ impl Desc {
                             "several cameras are defined ({}): say which with `camera = \"...\"`",
                             cameras.keys().cloned().collect::<Vec<_>>().join(", ")
                         ),
-                    )),
-                },
-            };
+                    ))
+                }
+            },
+        };
         let Some(rn) = r.get("root") else {
             return Err(cx.err(
                 &r.origin,

@@ -351,26 +351,62 @@ fn same_minor(a: &str, b: &str) -> bool {
     mm(a) == mm(b)
 }
 
-/// abi_stable's report runs to hundreds of lines; keep the lines that say
-/// what differs.
+/// abi_stable's report runs to hundreds of lines; keep what says where the
+/// layouts differ: the last error with its expected and found values, and the
+/// chain of fields leading to it (e.g. `... -> param_2: *const Ray -> generation: u64`).
 fn summarize_abi_error(full: &str) -> String {
-    let keep: Vec<&str> = full
-        .lines()
-        .map(str::trim)
-        .filter(|l| {
-            l.starts_with("Error:")
-                || l.contains("Expected:")
-                || l.contains("Found:")
-                || l.contains("mismatched")
-                || l.contains("version")
-        })
-        .take(8)
-        .collect();
-    if keep.is_empty() {
-        full.lines().take(6).collect::<Vec<_>>().join("\n  ")
-    } else {
-        keep.join("\n  ")
+    if std::env::var_os("RTK_DEBUG_ABI").is_some() {
+        eprintln!("{full}");
     }
+    let lines: Vec<&str> = full.lines().map(str::trim).collect();
+    let next_value = |from: usize| {
+        lines[from + 1..]
+            .iter()
+            .find(|l| !l.is_empty())
+            .copied()
+            .unwrap_or("")
+    };
+    let mut errors = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        if let Some(msg) = l.strip_prefix("Error:") {
+            let mut e = msg.trim().to_string();
+            if let Some(j) = lines[i..].iter().position(|x| *x == "Expected:") {
+                e.push_str(&format!(" (expected {}", next_value(i + j)));
+                if let Some(k) = lines[i + j..].iter().position(|x| *x == "Found:") {
+                    e.push_str(&format!(", found {}", next_value(i + j + k)));
+                }
+                e.push(')');
+            }
+            errors.push((i, e));
+        }
+    }
+    let Some((last, msg)) = errors.last() else {
+        return lines
+            .iter()
+            .filter(|l| !l.is_empty())
+            .take(4)
+            .copied()
+            .collect::<Vec<_>>()
+            .join("; ");
+    };
+    // The field chain: `field_name:` / `type:` pairs of the last "inside:" block.
+    let inside = lines[..*last]
+        .iter()
+        .rposition(|l| l.ends_with("inside:"))
+        .unwrap_or(0);
+    let mut chain = Vec::new();
+    let mut i = inside;
+    while i < *last && !lines[i].starts_with("Layout of") {
+        if let Some(f) = lines[i].strip_prefix("field_name:") {
+            let ty = lines
+                .get(i + 1)
+                .and_then(|t| t.strip_prefix("type:"))
+                .unwrap_or("?");
+            chain.push(format!("{f}: {}", ty.trim()));
+        }
+        i += 1;
+    }
+    format!("{msg} at {}", chain.join(" -> "))
 }
 
 /// Plugins loaded so far, by class: each library is loaded at most once.

@@ -79,10 +79,14 @@ pub fn parse_params<P: DeserializeOwned>(json: &str) -> Result<P, PluginError> {
         // An unknown key fails before it becomes part of the path: name it.
         if let Some(rest) = message.strip_prefix("unknown field `") {
             if let Some(end) = rest.find('`') {
-                if !key.is_empty() {
-                    key.push('.');
+                let field = &rest[..end];
+                let last = key.rsplit(['.', ']']).next().unwrap_or("");
+                if last != field {
+                    if !key.is_empty() {
+                        key.push('.');
+                    }
+                    key.push_str(field);
                 }
-                key.push_str(&rest[..end]);
             }
         }
         PluginError { key, message }

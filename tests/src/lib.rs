@@ -1,0 +1,285 @@
+//! Helpers for the integration tests: build the workspace's binary and
+//! plugins once (into the same target directory the tests run from), build
+//! the out-of-workspace fixture plugins once, run `rtk`, read images back.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+/// The workspace root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("workspace root")
+        .to_path_buf()
+}
+
+/// `target/` and the profile folder the running test binary was built in
+/// (`debug`, `release`...), from the test executable's own path.
+fn target_and_profile() -> (PathBuf, String) {
+    let exe = std::env::current_exe().expect("current exe");
+    // target/<profile>/deps/<test-binary>
+    let profile_dir = exe.parent().and_then(Path::parent).expect("profile dir");
+    let target = profile_dir.parent().expect("target dir").to_path_buf();
+    let profile = profile_dir
+        .file_name()
+        .expect("profile")
+        .to_string_lossy()
+        .into_owned();
+    (target, profile)
+}
+
+fn profile_args(profile: &str) -> Vec<String> {
+    match profile {
+        "debug" => vec![],
+        "release" => vec!["--release".into()],
+        p => vec!["--profile".into(), p.into()],
+    }
+}
+
+fn cargo() -> Command {
+    Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+}
+
+fn run_cargo(mut c: Command, what: &str) {
+    let out = c
+        .output()
+        .unwrap_or_else(|e| panic!("running cargo for {what}: {e}"));
+    assert!(
+        out.status.success(),
+        "cargo failed building {what}:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The folder holding `rtk` and the built-in plugins, built once per test run.
+pub fn bin_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let (target, profile) = target_and_profile();
+        let mut c = cargo();
+        c.current_dir(root())
+            .args([
+                "build",
+                "--workspace",
+                "--exclude",
+                "rtk-tests",
+                "--target-dir",
+            ])
+            .arg(&target)
+            .args(profile_args(&profile));
+        run_cargo(c, "the workspace");
+        target.join(&profile)
+    })
+}
+
+/// The `rtk` executable.
+pub fn rtk_path() -> PathBuf {
+    bin_dir().join(format!("rtk{}", std::env::consts::EXE_SUFFIX))
+}
+
+/// A command running `rtk` with the given arguments.
+pub fn rtk(args: &[&str]) -> Command {
+    let mut c = Command::new(rtk_path());
+    c.args(args)
+        .env_remove("RTK_PLUGIN_PATH")
+        .env("RUST_BACKTRACE", "0");
+    c
+}
+
+/// The fixture plugins of `tests/fixtures`, built once: returns the folder
+/// holding `librtk_<name>.so`. `abortplugin` is built with `panic = "abort"`.
+pub fn fixtures_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let (target, profile) = target_and_profile();
+        let ftarget = target.join("fixtures");
+        let manifest = root().join("tests/fixtures/Cargo.toml");
+        let mut c = cargo();
+        c.args([
+            "build",
+            "-p",
+            "rtk_panicky",
+            "-p",
+            "rtk_notplugin",
+            "--manifest-path",
+        ])
+        .arg(&manifest)
+        .arg("--target-dir")
+        .arg(&ftarget)
+        .args(profile_args(&profile));
+        run_cargo(c, "fixture plugins");
+        let mut c = cargo();
+        c.args(["rustc", "-p", "rtk_abortplugin", "--lib", "--manifest-path"])
+            .arg(&manifest)
+            .arg("--target-dir")
+            .arg(&ftarget)
+            .args(profile_args(&profile))
+            .args(["--", "-C", "panic=abort"]);
+        run_cargo(c, "the panic=abort fixture");
+        ftarget.join(&profile)
+    })
+}
+
+/// A plugin built against a kernel whose `Ray` record differs (its
+/// `generation` field is `u64`): a copy of `kernel/` edited at test time.
+pub fn other_abi_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let (target, profile) = target_and_profile();
+        let src = target.join("fixture-src/other-abi");
+        let _ = std::fs::remove_dir_all(&src);
+        copy_dir(&root().join("kernel"), &src.join("kernel"));
+        let abi = src.join("kernel/src/abi.rs");
+        let text = std::fs::read_to_string(&abi).expect("abi.rs");
+        let edited = text.replacen("pub generation: u32,", "pub generation: u64,", 1);
+        assert_ne!(text, edited, "the edit must change the Ray record");
+        std::fs::write(&abi, edited).expect("write abi.rs");
+        // The copy inherits nothing from the main workspace.
+        let toml = std::fs::read_to_string(src.join("kernel/Cargo.toml")).expect("kernel toml");
+        let toml = toml
+            .replace("rust-version.workspace = true", "")
+            .replace("version.workspace = true", "version = \"0.1.0\"")
+            .replace("edition.workspace = true", "edition = \"2021\"")
+            .replace("license.workspace = true", "")
+            .replace("abi_stable.workspace = true", "abi_stable = \"0.11.3\"")
+            .replace("serde.workspace = true", "serde = { version = \"1\", features = [\"derive\"] }")
+            .replace("serde_json.workspace = true", "serde_json = \"1\"")
+            .replace("serde_path_to_error.workspace = true", "serde_path_to_error = \"0.1\"")
+            .replace("glam.workspace = true", "glam = \"0.30\"");
+        std::fs::write(src.join("kernel/Cargo.toml"), toml).expect("kernel toml");
+        let plug = src.join("otherabi");
+        std::fs::create_dir_all(plug.join("src")).expect("mkdir");
+        std::fs::write(
+            plug.join("Cargo.toml"),
+            "[package]\nname = \"rtk_otherabi\"\nversion = \"0.1.0\"\nedition = \"2021\"\n\n[lib]\ncrate-type = [\"cdylib\"]\n\n\
+             [dependencies]\nrtk-kernel = { path = \"../kernel\" }\n\n[workspace]\n\n[profile.dev.package.\"*\"]\nopt-level = 3\n",
+        )
+        .expect("toml");
+        let lib = std::fs::read_to_string(root().join("tests/fixtures/panicky/src/lib.rs"))
+            .expect("panicky source")
+            .replace("\"panicky\"", "\"otherabi\"");
+        std::fs::write(plug.join("src/lib.rs"), lib).expect("lib.rs");
+        let _ = std::fs::copy(root().join("tests/fixtures/Cargo.lock"), plug.join("Cargo.lock"));
+        let ftarget = target.join("fixtures");
+        let mut c = cargo();
+        c.arg("build").arg("--manifest-path").arg(plug.join("Cargo.toml")).arg("--target-dir").arg(&ftarget).args(profile_args(&profile));
+        run_cargo(c, "the other-ABI fixture");
+        ftarget.join(&profile)
+    })
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("mkdir");
+    for e in std::fs::read_dir(from).expect("read_dir").flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            copy_dir(&p, &to.join(e.file_name()));
+        } else {
+            std::fs::copy(&p, to.join(e.file_name())).expect("copy");
+        }
+    }
+}
+
+/// A temporary plugin folder holding copies of the named libraries from `dir`.
+pub fn plugin_folder(dir: &Path, classes: &[&str]) -> tempfile::TempDir {
+    let t = tempfile::tempdir().expect("tempdir");
+    for c in classes {
+        let name = format!(
+            "{}rtk_{c}{}",
+            std::env::consts::DLL_PREFIX,
+            std::env::consts::DLL_SUFFIX
+        );
+        std::fs::copy(dir.join(&name), t.path().join(&name))
+            .unwrap_or_else(|e| panic!("copy {name}: {e}"));
+    }
+    t
+}
+
+/// The result of running `rtk`.
+pub struct Run {
+    /// Exit status was success.
+    pub ok: bool,
+    /// Standard output.
+    pub stdout: String,
+    /// Standard error.
+    pub stderr: String,
+}
+
+impl Run {
+    /// From a process output.
+    pub fn from(o: Output) -> Self {
+        Run {
+            ok: o.status.success(),
+            stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
+            stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
+        }
+    }
+    /// The `--stats` JSON.
+    pub fn stats(&self) -> serde_json::Value {
+        serde_json::from_str(&self.stdout)
+            .unwrap_or_else(|e| panic!("stats JSON: {e}\n{}", self.stdout))
+    }
+}
+
+/// Write `scene` into a temporary folder and render it to EXR with `args`.
+/// Returns the run and, on success, the linear image.
+pub fn render_scene(scene: &str, args: &[&str]) -> (Run, Option<Image>) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let sp = dir.path().join("scene.toml");
+    std::fs::write(&sp, scene).expect("write scene");
+    render_file(&sp, dir.path(), args)
+}
+
+/// Render a scene file to an EXR in `out_dir`.
+pub fn render_file(scene: &Path, out_dir: &Path, args: &[&str]) -> (Run, Option<Image>) {
+    let out = out_dir.join("out.exr");
+    let mut a = vec![
+        "render",
+        scene.to_str().expect("utf8"),
+        "-o",
+        out.to_str().expect("utf8"),
+        "-q",
+    ];
+    a.extend_from_slice(args);
+    let run = Run::from(rtk(&a).output().expect("run rtk"));
+    let img = if run.ok {
+        Some(Image::read(&out))
+    } else {
+        None
+    };
+    if !run.ok {
+        assert!(!out.exists(), "a failed render must leave no output file");
+    }
+    (run, img)
+}
+
+/// A linear RGB image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// Row-major RGB.
+    pub data: Vec<f32>,
+}
+
+impl Image {
+    /// Read an EXR.
+    pub fn read(p: &Path) -> Self {
+        let img = image::open(p)
+            .unwrap_or_else(|e| panic!("reading {}: {e}", p.display()))
+            .into_rgb32f();
+        Image {
+            width: img.width(),
+            height: img.height(),
+            data: img.into_raw(),
+        }
+    }
+    /// Pixel (x, y).
+    pub fn px(&self, x: u32, y: u32) -> [f32; 3] {
+        let i = ((y * self.width + x) * 3) as usize;
+        [self.data[i], self.data[i + 1], self.data[i + 2]]
+    }
+}

@@ -1,0 +1,7 @@
+//! rtk's integration tests, one binary (ripgrep's layout): each module a topic.
+
+mod bad_scenes;
+mod loading;
+mod panics;
+mod refusals;
+mod silhouette;

@@ -1,0 +1,226 @@
+//! Bad scenes: each gives a clear error naming file, line, object and key,
+//! a non-zero exit, and no output file.
+
+use rtk_tests::*;
+
+const GOOD: &str = r#"[render]
+width = 8
+height = 8
+root = "world"
+integrator = "normals"
+
+[cameras.main]
+class = "pinhole"
+
+[objects.ball]
+class = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+
+[objects.world]
+class = "list"
+children = [{ object = "ball" }]
+"#;
+
+/// Replace `from` by `to` in the good scene and check the error mentions every needle.
+fn bad(from: &str, to: &str, needles: &[&str]) {
+    assert!(GOOD.contains(from), "{from}");
+    let (run, img) = render_scene(&GOOD.replace(from, to), &[]);
+    assert!(!run.ok, "expected failure for {to:?}");
+    assert!(img.is_none());
+    for n in needles {
+        assert!(run.stderr.contains(n), "missing {n:?} in: {}", run.stderr);
+    }
+}
+
+#[test]
+fn the_good_scene_renders() {
+    let (run, img) = render_scene(GOOD, &[]);
+    assert!(run.ok, "{}", run.stderr);
+    assert!(img.is_some());
+}
+
+#[test]
+fn missing_file() {
+    let out = rtk(&[
+        "render",
+        "/nonexistent/scene.toml",
+        "-o",
+        "/tmp/rtk-never.png",
+    ])
+    .output()
+    .unwrap();
+    assert!(!out.status.success());
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("/nonexistent/scene.toml") && e.contains("cannot read"),
+        "{e}"
+    );
+}
+
+#[test]
+fn toml_syntax_error() {
+    bad(
+        "width = 8",
+        "width = = 8",
+        &["scene.toml:2:", "TOML syntax error"],
+    );
+}
+
+#[test]
+fn unknown_key_in_render() {
+    bad(
+        "width = 8",
+        "widht = 8",
+        &["scene.toml:2:1", "render", "key `widht`", "unknown key"],
+    );
+}
+
+#[test]
+fn unknown_key_in_plugin_parameters() {
+    bad(
+        "center = [",
+        "centre = [",
+        &[
+            "scene.toml:12:1",
+            "objects.ball",
+            "key `centre`",
+            "unknown field",
+        ],
+    );
+}
+
+#[test]
+fn wrong_type_in_plugin_parameters() {
+    bad(
+        "radius = 1.0",
+        "radius = \"big\"",
+        &[
+            "scene.toml:13:10",
+            "objects.ball",
+            "key `radius`",
+            "invalid type",
+        ],
+    );
+}
+
+#[test]
+fn wrong_type_in_render() {
+    bad(
+        "width = 8",
+        "width = \"wide\"",
+        &["scene.toml:2:9", "key `width`", "expected an integer"],
+    );
+}
+
+#[test]
+fn nan_number() {
+    bad(
+        "center = [0.0, 0.0, 0.0]",
+        "center = [0.0, nan, 0.0]",
+        &[
+            "scene.toml:12:16",
+            "objects.ball",
+            "key `center[1]`",
+            "finite",
+        ],
+    );
+}
+
+#[test]
+fn infinite_number() {
+    bad(
+        "radius = 1.0",
+        "radius = inf",
+        &["scene.toml:13:10", "key `radius`", "finite"],
+    );
+}
+
+#[test]
+fn negative_radius() {
+    bad(
+        "radius = 1.0",
+        "radius = -1.0",
+        &[
+            "scene.toml:13:10",
+            "objects.ball",
+            "key `radius`",
+            "positive",
+        ],
+    );
+}
+
+#[test]
+fn unknown_reference() {
+    bad(
+        "{ object = \"ball\" }",
+        "{ object = \"bal\" }",
+        &[
+            "scene.toml:17:",
+            "objects.world.children[0]",
+            "key `object`",
+            "no object named `bal`",
+            "objects defined: ball, world",
+        ],
+    );
+}
+
+#[test]
+fn unknown_shader_reference() {
+    bad(
+        "{ object = \"ball\" }",
+        "{ object = \"ball\", shader = \"red\" }",
+        &["scene.toml:17:", "key `shader`", "no shader named `red`"],
+    );
+}
+
+#[test]
+fn instancing_cycle() {
+    let scene = GOOD
+        .replace(
+            "class = \"sphere\"",
+            "class = \"list\"\nchildren = [\"world\"]",
+        )
+        .replace("center = [0.0, 0.0, 0.0]\nradius = 1.0\n", "");
+    let (run, _) = render_scene(&scene, &[]);
+    assert!(!run.ok);
+    assert!(
+        run.stderr
+            .contains("instancing cycle: world -> ball -> world"),
+        "{}",
+        run.stderr
+    );
+    assert!(
+        run.stderr.contains("objects.ball.children[0]") && run.stderr.contains("key `object`"),
+        "{}",
+        run.stderr
+    );
+}
+
+#[test]
+fn bad_set_override_names_the_command_line() {
+    let (run, _) = render_scene(GOOD, &["--set", "render.spp=0"]);
+    assert!(!run.ok);
+    assert!(
+        run.stderr.contains("--set render.spp=0") && run.stderr.contains("key `spp`"),
+        "{}",
+        run.stderr
+    );
+}
+
+#[test]
+fn bad_output_extension_is_refused_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let sp = dir.path().join("s.toml");
+    std::fs::write(&sp, GOOD).unwrap();
+    let out = rtk(&[
+        "render",
+        sp.to_str().unwrap(),
+        "-o",
+        dir.path().join("x.jpg").to_str().unwrap(),
+    ])
+    .output()
+    .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".png or .exr"));
+}
