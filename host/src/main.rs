@@ -179,7 +179,13 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
             "light_samples": s.light_samples,
             "nonfinite_samples": s.nonfinite_samples,
         });
-        println!("{}", serde_json::to_string_pretty(&json)?);
+        // A closed pipe (`| head`) is not an error worth a panic.
+        use std::io::Write;
+        let _ = writeln!(
+            std::io::stdout(),
+            "{}",
+            serde_json::to_string_pretty(&json)?
+        );
     }
     if !a.quiet {
         eprintln!(

@@ -11,6 +11,7 @@
 //!
 //! Plugin crates contain no `unsafe`: the raw-pointer glue lives here.
 
+pub mod shading;
 mod shims;
 
 use crate::abi::*;

@@ -1,0 +1,336 @@
+//! The watertight ray/triangle test of Woop, Benthin and Wald (JCGT 2013), in
+//! pbrt-v4's form: shear the triangle into ray space, compute the edge
+//! functions with one rounding less, and accept on consistent signs. Two
+//! rechecks in f64 keep it watertight where f32 cannot decide
+//! (numerics.md T1–T4):
+//! - an edge function that is exactly zero in f32 (the ray runs along an
+//!   edge or through a vertex) is recomputed in f64 (pbrt-v4);
+//! - a hit whose `t` lies within its own error bound of the origin is
+//!   rechecked in f64 instead of being rejected, which pbrt does and which
+//!   opens rare holes at vertices with nearly edge-on fans (rule 6).
+
+use super::{gamma, Real};
+
+/// A triangle hit: `t` and the barycentrics of the three vertices.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriHit<R> {
+    /// Ray parameter.
+    pub t: R,
+    /// Barycentric weights of p0, p1, p2 (sum to 1).
+    pub b: [R; 3],
+}
+
+#[inline]
+fn sub<R: Real>(a: [R; 3], b: [R; 3]) -> [R; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline]
+fn cross<R: Real>(a: [R; 3], b: [R; 3]) -> [R; 3] {
+    [
+        R::difference_of_products(a[1], b[2], a[2], b[1]),
+        R::difference_of_products(a[2], b[0], a[0], b[2]),
+        R::difference_of_products(a[0], b[1], a[1], b[0]),
+    ]
+}
+
+#[inline]
+fn mx<R: Real>(a: R, b: R) -> R {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
+/// Result of the core test: a hit, no hit, or "f32 cannot decide".
+enum Core<R> {
+    Hit(TriHit<R>, R),
+    Miss,
+    Undecided,
+}
+
+#[inline]
+fn core<R: Real>(
+    o: [R; 3],
+    d: [R; 3],
+    p: [[R; 3]; 3],
+    t_max: R,
+    exact_zero_is_undecided: bool,
+) -> Core<R> {
+    // Degenerate triangles are never hit (T3).
+    let n = cross(sub(p[2], p[0]), sub(p[1], p[0]));
+    if !(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > R::ZERO) {
+        return Core::Miss;
+    }
+    let mut t = [sub(p[0], o), sub(p[1], o), sub(p[2], o)];
+    // Permute so that the ray's largest direction component is z.
+    let ad = [d[0].abs(), d[1].abs(), d[2].abs()];
+    let kz = if ad[0] > ad[1] {
+        if ad[0] > ad[2] {
+            0
+        } else {
+            2
+        }
+    } else if ad[1] > ad[2] {
+        1
+    } else {
+        2
+    };
+    let kx = if kz == 2 { 0 } else { kz + 1 };
+    let ky = if kx == 2 { 0 } else { kx + 1 };
+    let dp = [d[kx], d[ky], d[kz]];
+    for v in t.iter_mut() {
+        *v = [v[kx], v[ky], v[kz]];
+    }
+    if dp[2] == R::ZERO {
+        return Core::Miss;
+    }
+    let sx = -dp[0] / dp[2];
+    let sy = -dp[1] / dp[2];
+    let sz = R::ONE / dp[2];
+    for v in t.iter_mut() {
+        v[0] = v[0] + sx * v[2];
+        v[1] = v[1] + sy * v[2];
+    }
+    let e0 = R::difference_of_products(t[1][0], t[2][1], t[1][1], t[2][0]);
+    let e1 = R::difference_of_products(t[2][0], t[0][1], t[2][1], t[0][0]);
+    let e2 = R::difference_of_products(t[0][0], t[1][1], t[0][1], t[1][0]);
+    if exact_zero_is_undecided && (e0 == R::ZERO || e1 == R::ZERO || e2 == R::ZERO) {
+        return Core::Undecided;
+    }
+    if (e0 < R::ZERO || e1 < R::ZERO || e2 < R::ZERO)
+        && (e0 > R::ZERO || e1 > R::ZERO || e2 > R::ZERO)
+    {
+        return Core::Miss;
+    }
+    let det = e0 + e1 + e2;
+    if det == R::ZERO {
+        return Core::Miss;
+    }
+    for v in t.iter_mut() {
+        v[2] = v[2] * sz;
+    }
+    let ts = e0 * t[0][2] + e1 * t[1][2] + e2 * t[2][2];
+    // Compare in scaled form (no division yet); NaN-false throughout.
+    if det < R::ZERO && !(ts < R::ZERO && ts >= t_max * det) {
+        return Core::Miss;
+    }
+    if det > R::ZERO && !(ts > R::ZERO && ts <= t_max * det) {
+        return Core::Miss;
+    }
+    let inv = R::ONE / det;
+    let hit = TriHit {
+        t: ts * inv,
+        b: [e0 * inv, e1 * inv, e2 * inv],
+    };
+    // pbrt-v4's bound on the error of t.
+    let max_zt = mx(mx(t[0][2].abs(), t[1][2].abs()), t[2][2].abs());
+    let max_xt = mx(mx(t[0][0].abs(), t[1][0].abs()), t[2][0].abs());
+    let max_yt = mx(mx(t[0][1].abs(), t[1][1].abs()), t[2][1].abs());
+    let dz = gamma::<R>(3) * max_zt;
+    let dx = gamma::<R>(5) * (max_xt + max_zt);
+    let dy = gamma::<R>(5) * (max_yt + max_zt);
+    let two = R::ONE + R::ONE;
+    let three = two + R::ONE;
+    let de = two * (gamma::<R>(2) * max_xt * max_yt + dy * max_xt + dx * max_yt);
+    let max_e = mx(mx(e0.abs(), e1.abs()), e2.abs());
+    let dt = three * (gamma::<R>(3) * max_e * max_zt + de * max_zt + dz * max_e) * inv.abs();
+    Core::Hit(hit, dt)
+}
+
+/// The f64 oracle: the same test in f64 on the (exactly converted) inputs.
+pub fn intersect_triangle_f64(
+    o: [f64; 3],
+    d: [f64; 3],
+    p: [[f64; 3]; 3],
+    t_min: f64,
+    t_max: f64,
+) -> Option<TriHit<f64>> {
+    match core(o, d, p, t_max, false) {
+        Core::Hit(h, _) if h.t > t_min && h.t < t_max && h.t.is_finite() => Some(h),
+        _ => None,
+    }
+}
+
+/// Watertight ray/triangle intersection in f32 with f64 rechecks. Accepts
+/// `t_min < t < t_max`, finite.
+#[inline]
+pub fn intersect_triangle(
+    o: [f32; 3],
+    d: [f32; 3],
+    p: [[f32; 3]; 3],
+    t_min: f32,
+    t_max: f32,
+) -> Option<TriHit<f32>> {
+    // The f64 recheck applies its own (much smaller) error bound: a hit from
+    // an origin lying exactly in the triangle's plane has t = 0 up to
+    // rounding in f64 too, and must not count.
+    let recheck = || {
+        let w = |a: [f32; 3]| a.map(|x| x as f64);
+        match core(w(o), w(d), p.map(w), t_max as f64, false) {
+            Core::Hit(h, dt) if h.t > dt => {
+                let t = h.t as f32;
+                (t > t_min && t < t_max && t.is_finite()).then_some(TriHit {
+                    t,
+                    b: h.b.map(|x| x as f32),
+                })
+            }
+            _ => None,
+        }
+    };
+    match core(o, d, p, t_max, true) {
+        Core::Miss => None,
+        Core::Undecided => recheck(),
+        Core::Hit(h, dt) => {
+            if !(h.t > t_min && h.t < t_max && h.t.is_finite()) {
+                None
+            } else if h.t <= dt {
+                recheck()
+            } else {
+                Some(h)
+            }
+        }
+    }
+}
+
+/// The hit point reconstructed from barycentrics (numerics.md rule 3) and its
+/// error bound `γ₇ Σ|bᵢpᵢ|`.
+#[inline]
+pub fn triangle_point_and_error(p: [[f32; 3]; 3], b: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    let mut out = [0.0f32; 3];
+    let mut abs = [0.0f32; 3];
+    for i in 0..3 {
+        out[i] = b[0] * p[0][i] + b[1] * p[1][i] + b[2] * p[2][i];
+        abs[i] = (b[0] * p[0][i]).abs() + (b[1] * p[1][i]).abs() + (b[2] * p[2][i]).abs();
+    }
+    (out, abs.map(|a| gamma::<f32>(7) * a))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lcg(s: &mut u64) -> f64 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*s >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn simple_hit_and_barycentrics() {
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let h =
+            intersect_triangle([0.25, 0.25, 1.0], [0.0, 0.0, -1.0], p, 0.0, f32::INFINITY).unwrap();
+        assert_eq!(h.t, 1.0);
+        assert!((h.b[1] - 0.25).abs() < 1e-7 && (h.b[2] - 0.25).abs() < 1e-7);
+        assert!(intersect_triangle([0.25, 0.25, 1.0], [0.0, 0.0, -1.0], p, 0.0, 1.0).is_none());
+        assert!(
+            intersect_triangle([0.75, 0.75, 1.0], [0.0, 0.0, -1.0], p, 0.0, f32::INFINITY)
+                .is_none()
+        );
+    }
+
+    /// An origin exactly in the triangle's plane (zero error bound, so no
+    /// offset) must never hit the triangle, whatever the direction.
+    #[test]
+    fn origin_in_plane_never_self_hits() {
+        let p = [[-6.0, 0.0, -6.0], [-6.0, 0.0, 6.0], [6.0, 0.0, 6.0]];
+        let mut s = 3u64;
+        for _ in 0..100_000 {
+            let o = [
+                (lcg(&mut s) * 8.0 - 6.0) as f32,
+                0.0,
+                (lcg(&mut s) * 8.0 - 2.0) as f32,
+            ];
+            let target = [4.0f32, 6.0, 4.0];
+            let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
+            assert!(intersect_triangle(o, d, p, 0.0, 1.0).is_none(), "{o:?}");
+        }
+    }
+
+    #[test]
+    fn degenerate_never_hit() {
+        let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        assert!(
+            intersect_triangle([0.5, 0.0, 1.0], [0.0, 0.0, -1.0], p, 0.0, f32::INFINITY).is_none()
+        );
+    }
+
+    /// numerics.md T1: rays aimed at the shared diagonal of a quad, at several
+    /// scales and offsets: none may pass between the two triangles.
+    #[test]
+    fn shared_edge_is_watertight() {
+        let mut s = 11u64;
+        for &(scale, off) in &[(1e-3f64, 0.0f64), (1.0, 0.0), (1e3, 1e3), (1.0, 1e5)] {
+            let q = |x: f64, y: f64| {
+                [
+                    (x * scale + off) as f32,
+                    (y * scale + off * 0.5) as f32,
+                    (off * 0.25) as f32,
+                ]
+            };
+            let (v0, v1, v2, v3) = (q(-1.0, -1.0), q(1.0, -1.0), q(1.0, 1.0), q(-1.0, 1.0));
+            let (ta, tb) = ([v0, v1, v2], [v0, v2, v3]);
+            let mut leaks = 0;
+            for _ in 0..20_000 {
+                let u = lcg(&mut s);
+                let target: Vec<f64> = (0..3)
+                    .map(|i| v0[i] as f64 + u * (v2[i] as f64 - v0[i] as f64))
+                    .collect();
+                let h = 0.5 + 2.5 * lcg(&mut s);
+                let o = [
+                    (target[0] + (lcg(&mut s) - 0.5) * scale) as f32,
+                    (target[1] + (lcg(&mut s) - 0.5) * scale) as f32,
+                    (target[2] + h * scale) as f32,
+                ];
+                let d64: Vec<f64> = (0..3).map(|i| target[i] - o[i] as f64).collect();
+                let l = (d64[0] * d64[0] + d64[1] * d64[1] + d64[2] * d64[2]).sqrt();
+                let d = [
+                    (d64[0] / l) as f32,
+                    (d64[1] / l) as f32,
+                    (d64[2] / l) as f32,
+                ];
+                let a = intersect_triangle(o, d, ta, 0.0, f32::INFINITY).is_some();
+                let b = intersect_triangle(o, d, tb, 0.0, f32::INFINITY).is_some();
+                if !a && !b {
+                    leaks += 1;
+                }
+            }
+            assert_eq!(leaks, 0, "scale {scale} offset {off}");
+        }
+    }
+
+    /// numerics.md T4: huge coordinates never give a non-finite t.
+    #[test]
+    fn huge_coordinates_never_non_finite() {
+        for e in 7..31 {
+            let s = 10f32.powi(e);
+            let p = [[-s, -s, 0.0], [s, -s, 0.0], [0.0, s, 0.0]];
+            if let Some(h) =
+                intersect_triangle([0.0, 0.0, s], [0.0, 0.0, -1.0], p, 0.0, f32::INFINITY)
+            {
+                assert!(h.t.is_finite(), "s = {s}");
+            }
+        }
+    }
+
+    #[test]
+    fn point_error_bounds_hold_against_f64() {
+        let mut s = 5u64;
+        for _ in 0..10_000 {
+            let c = 1e3;
+            let p: [[f32; 3]; 3] =
+                std::array::from_fn(|_| std::array::from_fn(|_| (c + lcg(&mut s) * 10.0) as f32));
+            let b0 = lcg(&mut s) as f32 * 0.5;
+            let b1 = lcg(&mut s) as f32 * 0.5;
+            let b = [1.0 - b0 - b1, b0, b1];
+            let (q, e) = triangle_point_and_error(p, b);
+            for i in 0..3 {
+                let exact: f64 = (0..3).map(|k| b[k] as f64 * p[k][i] as f64).sum();
+                assert!((q[i] as f64 - exact).abs() <= e[i] as f64);
+            }
+        }
+    }
+}

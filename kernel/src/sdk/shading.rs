@@ -1,0 +1,128 @@
+//! Shading helpers shared by Whitted-style shaders: direct light with shadow
+//! rays through `occluded` (never a nearest-hit query), mirror reflection,
+//! refraction and the dielectric Fresnel term.
+
+use super::Scene;
+use crate::abi::*;
+use crate::geom::spawn_ray;
+use glam::Vec3;
+
+/// Sum over every light of `f(wi) * Li * |cos θ| / pdf`, each light's sample
+/// tested with one shadow ray (offset past the hit's error bound). `f` gets
+/// the unit direction towards the light.
+pub fn direct_light(
+    ctx: &mut TraceCtx,
+    scene: &Scene,
+    ray: &Ray,
+    g: &LocalGeom,
+    mut f: impl FnMut(Vec3) -> Color,
+) -> Color {
+    let n = g.ns.v();
+    let mut sum = Color::BLACK;
+    for i in 0..scene.light_count() {
+        let u = [ctx.rng.next_f32(), ctx.rng.next_f32()];
+        let Some(ls) = scene.sample_light(ctx, i, g.p.v(), u, ray.time) else {
+            continue;
+        };
+        if !(ls.pdf > 0.0) || ls.li.is_black() {
+            continue;
+        }
+        let wi = ls.wi.v();
+        let cos = n.dot(wi).abs();
+        if cos == 0.0 {
+            continue;
+        }
+        let fv = f(wi);
+        if fv.is_black() {
+            continue;
+        }
+        let mut shadow = spawn_ray(g, wi, ray);
+        if ls.dist.is_finite() {
+            // Stop short of the light: point lights sit at `dist`.
+            shadow.t_max = ls.dist * (1.0 - crate::geom::SHADOW_EPSILON);
+        }
+        if scene.occluded(ctx, &shadow) {
+            continue;
+        }
+        sum = sum.add(fv.mul(ls.li).scale(cos / ls.pdf));
+    }
+    sum
+}
+
+/// Mirror `wo` (pointing away from the surface) about `n`.
+#[inline]
+pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
+    -wo + 2.0 * wo.dot(n) * n
+}
+
+/// Refract `wo` (pointing away from the surface, on the side `n` faces)
+/// with relative index `eta` = n_transmitted / n_incident; `None` on total
+/// internal reflection.
+#[inline]
+pub fn refract(wo: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = wo.dot(n);
+    let sin2_i = (1.0 - cos_i * cos_i).max(0.0);
+    let sin2_t = sin2_i / (eta * eta);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some((-wo / eta + (cos_i / eta - cos_t) * n).normalize())
+}
+
+/// Unpolarised Fresnel reflectance of a dielectric interface, for the cosine
+/// of the incident angle (on the side of the normal) and relative index `eta`.
+#[inline]
+pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let r_par = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (r_par * r_par + r_perp * r_perp)
+}
+
+/// A cosine-distributed direction around `n`, from two uniform numbers.
+#[inline]
+pub fn cosine_hemisphere(n: Vec3, u: [f32; 2]) -> Vec3 {
+    let r = u[0].sqrt();
+    let phi = std::f32::consts::TAU * u[1];
+    let (t, b) = n.any_orthonormal_pair();
+    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u[0]).max(0.0).sqrt()).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fresnel_limits() {
+        // Normal incidence on glass: ((1.5-1)/(1.5+1))^2 = 0.04.
+        assert!((fresnel_dielectric(1.0, 1.5) - 0.04).abs() < 1e-6);
+        assert_eq!(fresnel_dielectric(0.1, 1.0 / 1.5), 1.0);
+        assert!((fresnel_dielectric(0.0, 1.5) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn refraction_obeys_snell() {
+        let n = Vec3::Z;
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let t = refract(wo, n, 1.5).unwrap();
+        let sin_i = 0.6;
+        let sin_t = (t.x * t.x + t.y * t.y).sqrt();
+        assert!((sin_i - 1.5 * sin_t).abs() < 1e-6);
+        assert!(t.z < 0.0);
+        assert!(refract(Vec3::new(0.9, 0.0, (1.0f32 - 0.81).sqrt()), n, 1.0 / 1.5).is_none());
+    }
+
+    #[test]
+    fn reflect_mirrors() {
+        assert_eq!(
+            reflect(Vec3::new(1.0, 0.0, 1.0), Vec3::Z),
+            Vec3::new(-1.0, 0.0, 1.0)
+        );
+    }
+}

@@ -1,0 +1,350 @@
+#![doc = include_str!("../README.md")]
+
+mod bvh;
+mod load;
+
+use rtk_kernel::geom::{intersect_triangle, triangle_point_and_error, RayBoxPrecomp};
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::*;
+use std::path::PathBuf;
+
+#[derive(Deserialize, Clone, Copy, PartialEq)]
+#[serde(crate = "rtk_kernel::serde", rename_all = "lowercase")]
+enum Normals {
+    Auto,
+    Face,
+    Vertex,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq)]
+#[serde(crate = "rtk_kernel::serde", rename_all = "lowercase")]
+enum Accel {
+    Bvh,
+    None,
+}
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {
+    file: String,
+    #[serde(default = "auto")]
+    normals: Normals,
+    #[serde(default = "bvh")]
+    accel: Accel,
+}
+
+fn auto() -> Normals {
+    Normals::Auto
+}
+fn bvh() -> Accel {
+    Accel::Bvh
+}
+
+struct Mesh {
+    path: PathBuf,
+    normals_mode: Normals,
+    accel: Accel,
+    p: Vec<[f32; 3]>,
+    tris: Vec<[u32; 3]>,
+    vn: Option<Vec<Vec3>>,
+    uv: Option<Vec<[f32; 2]>>,
+    bvh: Option<bvh::Bvh>,
+    bounds: Bounds3,
+}
+
+impl Mesh {
+    #[inline]
+    fn verts(&self, i: u32) -> [[f32; 3]; 3] {
+        let t = self.tris[i as usize];
+        [
+            self.p[t[0] as usize],
+            self.p[t[1] as usize],
+            self.p[t[2] as usize],
+        ]
+    }
+
+    fn tri_bounds(&self, i: u32) -> Bounds3 {
+        let v = self.verts(i);
+        Bounds3::EMPTY
+            .include(v[0].into())
+            .include(v[1].into())
+            .include(v[2].into())
+    }
+
+    /// Nearest hit among `ids`, lowest id on ties; updates `best`.
+    #[inline]
+    fn test_ids(
+        &self,
+        ray: &Ray,
+        ids: &[u32],
+        best: &mut Option<(f32, u32, [f32; 2])>,
+        prim_tests: &mut u64,
+    ) {
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        for &i in ids {
+            *prim_tests += 1;
+            // Allow an equal t through so the tie rule can apply.
+            let t_max = match best {
+                Some((t, _, _)) => t.next_up(),
+                None => ray.t_max,
+            };
+            if let Some(h) = intersect_triangle(o, d, self.verts(i), ray.t_min, t_max) {
+                let better = match best {
+                    Some((t, id, _)) => h.t < *t || (h.t == *t && i < *id),
+                    None => true,
+                };
+                if better && h.t < ray.t_max {
+                    *best = Some((h.t, i, [h.b[1], h.b[2]]));
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn any_ids(&self, ray: &Ray, ids: &[u32], prim_tests: &mut u64) -> bool {
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        ids.iter().any(|&i| {
+            *prim_tests += 1;
+            intersect_triangle(o, d, self.verts(i), ray.t_min, ray.t_max).is_some()
+        })
+    }
+
+    fn nearest(&self, ctx: &mut TraceCtx, ray: &Ray) -> Option<(f32, u32, [f32; 2])> {
+        let mut best = None;
+        let mut prim_tests = 0;
+        match &self.bvh {
+            Some(b) => {
+                let pre = RayBoxPrecomp::new(ray);
+                b.traverse(
+                    &pre,
+                    ray.t_min,
+                    ray.t_max,
+                    &mut ctx.stats.node_tests,
+                    |ids, t_max| {
+                        self.test_ids(ray, ids, &mut best, &mut prim_tests);
+                        // Keep boxes that touch the current best: a tie may still come.
+                        Some(best.map_or(t_max, |(t, _, _)| t.next_up()))
+                    },
+                );
+            }
+            None => {
+                for i in 0..self.tris.len() as u32 {
+                    self.test_ids(ray, &[i], &mut best, &mut prim_tests);
+                }
+            }
+        }
+        ctx.stats.prim_tests += prim_tests;
+        best
+    }
+}
+
+impl Object for Mesh {
+    type Params = Params;
+
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        if p.file.is_empty() {
+            return Err(PluginError::key("file", "must name a .ply or .obj file"));
+        }
+        Ok(Mesh {
+            path: env.resolve(&p.file),
+            normals_mode: p.normals,
+            accel: p.accel,
+            p: vec![],
+            tris: vec![],
+            vn: None,
+            uv: None,
+            bvh: None,
+            bounds: Bounds3::EMPTY,
+        })
+    }
+
+    fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
+        let bytes = env.read_file(&self.path).map_err(|e| {
+            PluginError::key("file", format!("cannot read {}: {e}", self.path.display()))
+        })?;
+        let m = load::load(&self.path, &bytes)?;
+        self.p = m.positions;
+        self.tris = m.tris;
+        self.uv = m.uvs;
+        self.vn = match (self.normals_mode, m.normals) {
+            (Normals::Face, _) => None,
+            (_, Some(n)) => Some(
+                n.into_iter()
+                    .map(|v| Vec3::from(v).normalize_or(Vec3::Z))
+                    .collect(),
+            ),
+            (Normals::Vertex, None) => Some(self.vertex_normals()),
+            (Normals::Auto, None) => None,
+        };
+        let boxes: Vec<Bounds3> = (0..self.tris.len() as u32)
+            .map(|i| self.tri_bounds(i))
+            .collect();
+        self.bounds = boxes.iter().fold(Bounds3::EMPTY, |a, b| a.union(*b));
+        if self.accel == Accel::Bvh {
+            self.bvh = Some(bvh::Bvh::build(&boxes));
+        }
+        Ok(())
+    }
+
+    fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
+        self.bounds
+    }
+
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
+        match self.nearest(ctx, ray) {
+            Some((t, prim, uv)) => {
+                hit.record_leaf(level, t, prim, uv);
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, _level: u32) -> bool {
+        let mut tests = 0;
+        let found = match &self.bvh {
+            Some(b) => {
+                let pre = RayBoxPrecomp::new(ray);
+                let mut found = false;
+                b.traverse(
+                    &pre,
+                    ray.t_min,
+                    ray.t_max,
+                    &mut ctx.stats.node_tests,
+                    |ids, t_max| {
+                        found = self.any_ids(ray, ids, &mut tests);
+                        (!found).then_some(t_max)
+                    },
+                );
+                found
+            }
+            None => (0..self.tris.len() as u32).any(|i| self.any_ids(ray, &[i], &mut tests)),
+        };
+        ctx.stats.prim_tests += tests;
+        found
+    }
+
+    fn local_geom(
+        &self,
+        _ctx: &mut TraceCtx,
+        _ray: &Ray,
+        hit: &Hit,
+        level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        let e = hit.entry(level);
+        let i = e.prim;
+        let v = self.verts(i);
+        let b = [1.0 - e.uv[0] - e.uv[1], e.uv[0], e.uv[1]];
+        let (p, err) = triangle_point_and_error(v, b);
+        let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
+        let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
+        out.p = Vec3::from(p).into();
+        out.p_err = Vec3::from(err).into();
+        out.ng = ng.into();
+        out.filled |= geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL;
+        if mask & geom_mask::SHADING_NORMAL != 0 {
+            let ns = match &self.vn {
+                Some(vn) => {
+                    let t = self.tris[i as usize];
+                    let n = (vn[t[0] as usize] * b[0]
+                        + vn[t[1] as usize] * b[1]
+                        + vn[t[2] as usize] * b[2])
+                        .normalize_or(ng);
+                    n
+                }
+                None => ng,
+            };
+            out.ns = ns.into();
+            out.filled |= geom_mask::SHADING_NORMAL;
+        }
+        if mask & (geom_mask::UV | geom_mask::TANGENTS) != 0 {
+            let t = self.tris[i as usize];
+            let uv = match &self.uv {
+                Some(u) => [u[t[0] as usize], u[t[1] as usize], u[t[2] as usize]],
+                None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+            };
+            out.uv = [
+                b[0] * uv[0][0] + b[1] * uv[1][0] + b[2] * uv[2][0],
+                b[0] * uv[0][1] + b[1] * uv[1][1] + b[2] * uv[2][1],
+            ];
+            let (du02, du12) = (uv[0][0] - uv[2][0], uv[1][0] - uv[2][0]);
+            let (dv02, dv12) = (uv[0][1] - uv[2][1], uv[1][1] - uv[2][1]);
+            let (dp02, dp12) = (p0 - p2, p1 - p2);
+            let det = du02 * dv12 - dv02 * du12;
+            let (dpdu, dpdv) = if det.abs() > 1e-12 {
+                let inv = 1.0 / det;
+                (
+                    (dv12 * dp02 - dv02 * dp12) * inv,
+                    (du02 * dp12 - du12 * dp02) * inv,
+                )
+            } else {
+                ng.any_orthonormal_pair()
+            };
+            out.dpdu = dpdu.into();
+            out.dpdv = dpdv.into();
+            out.filled |= geom_mask::UV | geom_mask::TANGENTS;
+        }
+    }
+
+    const HAS_PRIM_SET: bool = true;
+    fn prim_count(&self) -> u32 {
+        self.tris.len() as u32
+    }
+    fn prim_bounds(&self, first: u32, out: &mut [Bounds3]) {
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = self.tri_bounds(first + k as u32);
+        }
+    }
+    fn intersect_prims(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        ids: &[u32],
+        hit: &mut Hit,
+        level: u32,
+    ) -> bool {
+        let mut best = None;
+        let mut tests = 0;
+        self.test_ids(ray, ids, &mut best, &mut tests);
+        ctx.stats.prim_tests += tests;
+        match best {
+            Some((t, prim, uv)) => {
+                hit.record_leaf(level, t, prim, uv);
+                true
+            }
+            None => false,
+        }
+    }
+    fn occluded_prims(&self, ctx: &mut TraceCtx, ray: &Ray, ids: &[u32], _level: u32) -> bool {
+        let mut tests = 0;
+        let r = self.any_ids(ray, ids, &mut tests);
+        ctx.stats.prim_tests += tests;
+        r
+    }
+
+    const HAS_SURFACE_SAMPLING: bool = false;
+}
+
+impl Mesh {
+    /// Area-weighted vertex normals.
+    fn vertex_normals(&self) -> Vec<Vec3> {
+        let mut n = vec![Vec3::ZERO; self.p.len()];
+        for t in &self.tris {
+            let (a, b, c) = (
+                Vec3::from(self.p[t[0] as usize]),
+                Vec3::from(self.p[t[1] as usize]),
+                Vec3::from(self.p[t[2] as usize]),
+            );
+            let f = (b - a).cross(c - a); // length = 2 * area
+            for &v in t {
+                n[v as usize] += f;
+            }
+        }
+        n.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect()
+    }
+}
+
+rtk_kernel::export_object!(Mesh, class = "mesh", doc = include_str!("../README.md"));

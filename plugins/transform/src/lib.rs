@@ -1,0 +1,163 @@
+#![doc = include_str!("../README.md")]
+
+use rtk_kernel::geom::gamma;
+use rtk_kernel::glam::{Affine3A, DAffine3, Mat3, Vec3};
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::xform::{self, Step};
+use rtk_kernel::*;
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {
+    matrix: Option<Vec<f64>>,
+    steps: Option<Vec<Step>>,
+}
+
+struct Transform {
+    /// Object to parent.
+    m: Affine3A,
+    /// Parent to object.
+    inv: Affine3A,
+    /// Normals: (M⁻¹)ᵀ.
+    normal: Mat3,
+    /// |M| for error propagation.
+    abs_m: Mat3,
+    flips: bool,
+    child: Option<Child>,
+}
+
+fn to_f32(m: &DAffine3) -> Affine3A {
+    Affine3A::from_mat3_translation(m.matrix3.as_mat3(), m.translation.as_vec3())
+}
+
+impl Object for Transform {
+    type Params = Params;
+
+    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+        let m = match (p.matrix, p.steps) {
+            (Some(m), None) => {
+                let a = xform::matrix_from_rows("matrix", &m)?;
+                xform::check("matrix", &a)?;
+                a
+            }
+            (None, Some(s)) => xform::compose("steps", &s)?,
+            _ => return Err(PluginError::msg("give exactly one of `matrix` and `steps`")),
+        };
+        let inv = m.inverse();
+        let normal = inv.matrix3.transpose();
+        let abs = m.matrix3.as_mat3();
+        Ok(Transform {
+            m: to_f32(&m),
+            inv: to_f32(&inv),
+            normal: normal.as_mat3(),
+            abs_m: Mat3::from_cols(abs.x_axis.abs(), abs.y_axis.abs(), abs.z_axis.abs()),
+            flips: m.matrix3.determinant() < 0.0,
+            child: None,
+        })
+    }
+
+    fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
+        if self.child.is_some() {
+            return Err(PluginError::key(
+                "children",
+                "a transform takes exactly one child",
+            ));
+        }
+        self.child = Some(child);
+        Ok(())
+    }
+
+    fn prepare(&mut self, _env: &Prepare) -> Result<(), PluginError> {
+        if self.child.is_none() {
+            return Err(PluginError::key("children", "a transform needs one child"));
+        }
+        Ok(())
+    }
+
+    fn bounds(&self, t0: f32, t1: f32) -> Bounds3 {
+        let Some(c) = &self.child else {
+            return Bounds3::EMPTY;
+        };
+        let b = c.bounds(t0, t1);
+        if b.is_empty() {
+            return b;
+        }
+        let mut out = Bounds3::EMPTY;
+        for p in b.corners() {
+            out = out.include(self.m.transform_point3(p));
+        }
+        // Widen by the rounding of the corner transforms.
+        let g = gamma::<f32>(3);
+        let pad = (out.min.v().abs().max(out.max.v().abs())) * g;
+        Bounds3::new(out.min.v() - pad, out.max.v() + pad)
+    }
+
+    #[inline]
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
+        let Some(c) = &self.child else { return false };
+        let r = self.to_object(ray);
+        if c.intersect(ctx, &r, hit, level + 1) {
+            hit.record_child(level, 0);
+            true
+        } else {
+            false
+        }
+    }
+
+    #[inline]
+    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, level: u32) -> bool {
+        let Some(c) = &self.child else { return false };
+        c.occluded(ctx, &self.to_object(ray), level + 1)
+    }
+
+    fn local_geom(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        hit: &Hit,
+        level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        let Some(c) = &self.child else { return };
+        c.local_geom(ctx, &self.to_object(ray), hit, level + 1, mask, out);
+        if out.filled & geom_mask::POSITION != 0 {
+            let p = out.p.v();
+            let q = self.m.transform_point3(p);
+            // pbrt's bound for a transformed point with error: (γ₃+1)|M|e + γ₃(|M||p| + |t|).
+            let g3 = gamma::<f32>(3);
+            let e = (1.0 + g3) * (self.abs_m * out.p_err.v())
+                + g3 * (self.abs_m * p.abs() + Vec3::from(self.m.translation).abs());
+            out.p = q.into();
+            out.p_err = e.into();
+        }
+        if out.filled & geom_mask::GEOMETRIC_NORMAL != 0 {
+            out.ng = (self.normal * out.ng.v()).normalize_or(Vec3::Z).into();
+        }
+        if out.filled & geom_mask::SHADING_NORMAL != 0 {
+            out.ns = (self.normal * out.ns.v()).normalize_or(Vec3::Z).into();
+        }
+        if out.filled & geom_mask::TANGENTS != 0 {
+            out.dpdu = self.m.transform_vector3(out.dpdu.v()).into();
+            let v = self.m.transform_vector3(out.dpdv.v());
+            out.dpdv = if self.flips { (-v).into() } else { v.into() };
+        }
+    }
+}
+
+impl Transform {
+    #[inline]
+    fn to_object(&self, ray: &Ray) -> Ray {
+        Ray {
+            origin: self.inv.transform_point3(ray.origin.v()).into(),
+            dir: self.inv.transform_vector3(ray.dir.v()).into(),
+            ..*ray
+        }
+    }
+}
+
+rtk_kernel::export_object!(
+    Transform,
+    class = "transform",
+    doc = include_str!("../README.md")
+);
