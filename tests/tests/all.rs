@@ -1,7 +1,9 @@
 //! rtk's integration tests, one binary (ripgrep's layout): each module a topic.
 
 mod bad_scenes;
+mod dropin;
 mod loading;
 mod panics;
 mod refusals;
 mod silhouette;
+mod whitted;

@@ -146,6 +146,16 @@ impl Object for Mesh {
         if p.file.is_empty() {
             return Err(PluginError::key("file", "must name a .ply or .obj file"));
         }
+        let ext = std::path::Path::new(&p.file)
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        if !matches!(ext.as_deref(), Some("ply") | Some("obj")) {
+            return Err(PluginError::key(
+                "file",
+                format!("{}: unknown mesh format: use .ply or .obj", p.file),
+            ));
+        }
         Ok(Mesh {
             path: env.resolve(&p.file),
             normals_mode: p.normals,
