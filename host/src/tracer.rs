@@ -268,7 +268,7 @@ fn direct_light(t: &Tracer, ctx: &mut TraceCtx, s: &ShaderFns, ray: &Ray, g: &Lo
             continue;
         }
         let f = (s.eval)(s.this, ctx, g, &wo.into(), &wi.into());
-        sum = sum.add(f.mul(ls.li).scale(cos / ls.pdf));
+        sum = sum.plus(f.times(ls.li).scale(cos / ls.pdf));
     }
     sum
 }
@@ -287,7 +287,7 @@ extern "C" fn api_background(host: *const c_void, ray: *const Ray) -> Color {
     let mut c = t.background;
     for l in &t.lights {
         if let Some(le) = l.le {
-            c = c.add(le(l.this, ray));
+            c = c.plus(le(l.this, ray));
         }
     }
     c

@@ -73,7 +73,7 @@ impl Color {
     }
     /// Componentwise product.
     #[inline]
-    pub fn mul(self, o: Color) -> Color {
+    pub fn times(self, o: Color) -> Color {
         Color::new(self.r * o.r, self.g * o.g, self.b * o.b)
     }
     /// Scale.
@@ -83,7 +83,7 @@ impl Color {
     }
     /// Sum.
     #[inline]
-    pub fn add(self, o: Color) -> Color {
+    pub fn plus(self, o: Color) -> Color {
         Color::new(self.r + o.r, self.g + o.g, self.b + o.b)
     }
     /// True when every component is zero.

@@ -2,6 +2,7 @@
 
 mod bad_scenes;
 mod dropin;
+mod hygiene;
 mod loading;
 mod panics;
 mod refusals;

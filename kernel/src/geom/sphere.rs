@@ -65,12 +65,9 @@ pub fn intersect_sphere<R: Real>(c: [R; 3], r: R, o: [R; 3], d: [R; 3]) -> Optio
 /// "t lower bound ≤ 0" rule).
 #[inline]
 pub fn nearest_root<R: Real>(h: &SphereHit<R>, t_min: R, t_max: R) -> Option<R> {
-    for t in [h.t0, h.t1] {
-        if t > t_min && t < t_max && t > h.t_err && t.is_finite() {
-            return Some(t);
-        }
-    }
-    None
+    [h.t0, h.t1]
+        .into_iter()
+        .find(|&t| t > t_min && t < t_max && t > h.t_err && t.is_finite())
 }
 
 /// The hit point `o + t d` reprojected onto the sphere, and its error bound

@@ -44,7 +44,7 @@ pub fn direct_light(
         if scene.occluded(ctx, &shadow) {
             continue;
         }
-        sum = sum.add(fv.mul(ls.li).scale(cos / ls.pdf));
+        sum = sum.plus(fv.times(ls.li).scale(cos / ls.pdf));
     }
     sum
 }

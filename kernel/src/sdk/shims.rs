@@ -205,15 +205,15 @@ fn object_fns<T: Object, D: Decl>() -> ObjectFns {
         intersect: obj_intersect::<T, D>,
         occluded: obj_occluded::<T, D>,
         local_geom: obj_local_geom::<T, D>,
-        bounds: obj_bounds::<T, D>,
-        bounding_sphere: T::HAS_BOUNDING_SPHERE.then_some(obj_bounding_sphere::<T, D> as _),
+        bounds: obj_bounds::<T>,
+        bounding_sphere: T::HAS_BOUNDING_SPHERE.then_some(obj_bounding_sphere::<T> as _),
         hull_points: None,
         slab_bounds: None,
         in_interior: T::HAS_INTERIOR.then_some(obj_in_interior::<T, D> as _),
         sample_surface: T::HAS_SURFACE_SAMPLING.then_some(obj_sample_surface::<T, D> as _),
-        area: T::HAS_SURFACE_SAMPLING.then_some(obj_area::<T, D> as _),
-        prim_count: T::HAS_PRIM_SET.then_some(obj_prim_count::<T, D> as _),
-        prim_bounds: T::HAS_PRIM_SET.then_some(obj_prim_bounds::<T, D> as _),
+        area: T::HAS_SURFACE_SAMPLING.then_some(obj_area::<T> as _),
+        prim_count: T::HAS_PRIM_SET.then_some(obj_prim_count::<T> as _),
+        prim_bounds: T::HAS_PRIM_SET.then_some(obj_prim_bounds::<T> as _),
         intersect_prims: T::HAS_PRIM_SET.then_some(obj_intersect_prims::<T, D> as _),
         occluded_prims: T::HAS_PRIM_SET.then_some(obj_occluded_prims::<T, D> as _),
         reorder_prims: None,
@@ -296,12 +296,7 @@ extern "C" fn obj_local_geom<T: Object, D: Decl>(
     })
 }
 
-extern "C" fn obj_bounds<T: Object, D: Decl>(
-    this: *const c_void,
-    t0: f32,
-    t1: f32,
-    out: *mut Bounds3,
-) {
+extern "C" fn obj_bounds<T: Object>(this: *const c_void, t0: f32, t1: f32, out: *mut Bounds3) {
     let r = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: the caller passes the live object.
         unsafe { obj::<T>(this) }.bounds(t0, t1)
@@ -311,7 +306,7 @@ extern "C" fn obj_bounds<T: Object, D: Decl>(
     unsafe { *out = r.unwrap_or(Bounds3::EMPTY) };
 }
 
-extern "C" fn obj_bounding_sphere<T: Object, D: Decl>(
+extern "C" fn obj_bounding_sphere<T: Object>(
     this: *const c_void,
     t0: f32,
     t1: f32,
@@ -356,17 +351,17 @@ extern "C" fn obj_sample_surface<T: Object, D: Decl>(
     })
 }
 
-extern "C" fn obj_area<T: Object, D: Decl>(this: *const c_void, time: f32) -> f32 {
+extern "C" fn obj_area<T: Object>(this: *const c_void, time: f32) -> f32 {
     // SAFETY: the caller passes the live object.
     catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.area(time))).unwrap_or(0.0)
 }
 
-extern "C" fn obj_prim_count<T: Object, D: Decl>(this: *const c_void) -> u32 {
+extern "C" fn obj_prim_count<T: Object>(this: *const c_void) -> u32 {
     // SAFETY: the caller passes the live object.
     catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.prim_count())).unwrap_or(0)
 }
 
-extern "C" fn obj_prim_bounds<T: Object, D: Decl>(
+extern "C" fn obj_prim_bounds<T: Object>(
     this: *const c_void,
     first: u32,
     n: u32,
@@ -468,8 +463,8 @@ pub fn shader_module<T: Shader, D: Decl>() -> ShaderModuleRef {
         destroy: destroy::<T>,
         eval: sh_eval::<T, D>,
         sample: sh_sample::<T, D>,
-        pdf: sh_pdf::<T, D>,
-        emitted: T::EMITS.then_some(sh_emitted::<T, D> as _),
+        pdf: sh_pdf::<T>,
+        emitted: T::EMITS.then_some(sh_emitted::<T> as _),
         shade: T::SHADES.then_some(sh_shade::<T, D> as _),
     }
     .leak_into_prefix()
@@ -520,7 +515,7 @@ extern "C" fn sh_sample<T: Shader, D: Decl>(
     })
 }
 
-extern "C" fn sh_pdf<T: Shader, D: Decl>(
+extern "C" fn sh_pdf<T: Shader>(
     this: *const c_void,
     geom: *const LocalGeom,
     wo: *const Float3,
@@ -533,7 +528,7 @@ extern "C" fn sh_pdf<T: Shader, D: Decl>(
     .unwrap_or(0.0)
 }
 
-extern "C" fn sh_emitted<T: Shader, D: Decl>(
+extern "C" fn sh_emitted<T: Shader>(
     this: *const c_void,
     geom: *const LocalGeom,
     wo: *const Float3,
@@ -576,7 +571,7 @@ pub fn integrator_module<T: Integrator, D: Decl>() -> IntegratorModuleRef {
         meta: meta::<D>(),
         create: int_create::<T, D>,
         destroy: destroy::<T>,
-        max_depth: int_max_depth::<T, D>,
+        max_depth: int_max_depth::<T>,
         li: int_li::<T, D>,
     }
     .leak_into_prefix()
@@ -593,7 +588,7 @@ extern "C" fn int_create<T: Integrator, D: Decl>(
     })
 }
 
-extern "C" fn int_max_depth<T: Integrator, D: Decl>(this: *const c_void) -> u32 {
+extern "C" fn int_max_depth<T: Integrator>(this: *const c_void) -> u32 {
     // SAFETY: the caller passes the live integrator.
     catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.max_depth())).unwrap_or(0)
 }
@@ -628,7 +623,7 @@ pub fn camera_module<T: Camera, D: Decl>() -> CameraModuleRef {
         meta: meta::<D>(),
         create: cam_create::<T, D>,
         destroy: destroy::<T>,
-        generate_ray: cam_generate_ray::<T, D>,
+        generate_ray: cam_generate_ray::<T>,
     }
     .leak_into_prefix()
 }
@@ -644,7 +639,7 @@ extern "C" fn cam_create<T: Camera, D: Decl>(
     })
 }
 
-extern "C" fn cam_generate_ray<T: Camera, D: Decl>(
+extern "C" fn cam_generate_ray<T: Camera>(
     this: *const c_void,
     sample: *const CameraSample,
     out: *mut Ray,
@@ -678,11 +673,11 @@ pub fn light_module<T: Light, D: Decl>() -> LightModuleRef {
         meta: meta::<D>(),
         create: light_create::<T, D>,
         destroy: destroy::<T>,
-        flags: light_flags::<T, D>,
-        preprocess: Some(light_preprocess::<T, D>),
+        flags: light_flags::<T>,
+        preprocess: Some(light_preprocess::<T>),
         sample_li: light_sample_li::<T, D>,
         pdf_li: None,
-        le: T::HAS_LE.then_some(light_le::<T, D> as _),
+        le: T::HAS_LE.then_some(light_le::<T> as _),
     }
     .leak_into_prefix()
 }
@@ -698,12 +693,12 @@ extern "C" fn light_create<T: Light, D: Decl>(
     })
 }
 
-extern "C" fn light_flags<T: Light, D: Decl>(this: *const c_void) -> u32 {
+extern "C" fn light_flags<T: Light>(this: *const c_void) -> u32 {
     // SAFETY: the caller passes the live light.
     catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.flags())).unwrap_or(0)
 }
 
-extern "C" fn light_preprocess<T: Light, D: Decl>(this: *mut c_void, world: *const Bounds3) {
+extern "C" fn light_preprocess<T: Light>(this: *mut c_void, world: *const Bounds3) {
     let _ = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: the caller passes the live light, exclusively, and valid bounds.
         unsafe { (*(this as *mut T)).preprocess(&*world) }
@@ -731,7 +726,7 @@ extern "C" fn light_sample_li<T: Light, D: Decl>(
     })
 }
 
-extern "C" fn light_le<T: Light, D: Decl>(this: *const c_void, ray: *const Ray) -> Color {
+extern "C" fn light_le<T: Light>(this: *const c_void, ray: *const Ray) -> Color {
     catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: the caller passes the live light and a valid ray.
         unsafe { obj::<T>(this).le(&*ray) }

@@ -259,11 +259,8 @@ impl Object for Mesh {
             let ns = match &self.vn {
                 Some(vn) => {
                     let t = self.tris[i as usize];
-                    let n = (vn[t[0] as usize] * b[0]
-                        + vn[t[1] as usize] * b[1]
-                        + vn[t[2] as usize] * b[2])
-                        .normalize_or(ng);
-                    n
+                    (vn[t[0] as usize] * b[0] + vn[t[1] as usize] * b[1] + vn[t[2] as usize] * b[2])
+                        .normalize_or(ng)
                 }
                 None => ng,
             };

@@ -56,7 +56,7 @@ impl Phong {
         let mut f = self.kd.scale(FRAC_1_PI);
         if !self.ks.is_black() {
             let cos_a = reflect(wo, n).dot(wi).max(0.0);
-            f = f.add(
+            f = f.plus(
                 self.ks
                     .scale((self.n + 2.0) / (2.0 * PI) * cos_a.powf(self.n)),
             );
@@ -150,19 +150,19 @@ impl Shader for Phong {
         if !self.kt.is_black() {
             let eta = if entering { self.ior } else { 1.0 / self.ior };
             let f = fresnel_dielectric(wo.dot(n), eta);
-            reflect_weight = reflect_weight.add(self.kt.scale(f));
+            reflect_weight = reflect_weight.plus(self.kt.scale(f));
             if let Some(t_dir) = refract(wo, n, eta) {
                 let t = spawn_ray(g, t_dir, ray);
-                l = l.add(
-                    self.kt
-                        .scale(1.0 - f)
-                        .mul(scene.trace(ctx, &t, ray_kind::REFRACTION)),
-                );
+                l = l.plus(self.kt.scale(1.0 - f).times(scene.trace(
+                    ctx,
+                    &t,
+                    ray_kind::REFRACTION,
+                )));
             }
         }
         if !reflect_weight.is_black() {
             let r = spawn_ray(g, r_dir, ray);
-            l = l.add(reflect_weight.mul(scene.trace(ctx, &r, ray_kind::REFLECTION)));
+            l = l.plus(reflect_weight.times(scene.trace(ctx, &r, ray_kind::REFLECTION)));
         }
         l
     }

@@ -47,7 +47,7 @@ impl Integrator for Whitted {
         }
         let g = scene.local_geom(ctx, ray, &hit, MASK);
         let wo = -ray.dir.v().normalize();
-        scene.emitted(&g, wo).add(scene.shade(ctx, ray, &g))
+        scene.emitted(&g, wo).plus(scene.shade(ctx, ray, &g))
     }
 }
 
