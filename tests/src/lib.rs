@@ -102,6 +102,8 @@ pub fn fixtures_dir() -> &'static Path {
             "rtk_panicky",
             "-p",
             "rtk_notplugin",
+            "-p",
+            "rtk_dropin",
             "--manifest-path",
         ])
         .arg(&manifest)

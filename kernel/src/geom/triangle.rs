@@ -28,9 +28,9 @@ fn sub<R: Real>(a: [R; 3], b: [R; 3]) -> [R; 3] {
 #[inline]
 fn cross<R: Real>(a: [R; 3], b: [R; 3]) -> [R; 3] {
     [
-        R::difference_of_products(a[1], b[2], a[2], b[1]),
-        R::difference_of_products(a[2], b[0], a[0], b[2]),
-        R::difference_of_products(a[0], b[1], a[1], b[0]),
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
     ]
 }
 
@@ -93,9 +93,13 @@ fn core<R: Real>(
         v[0] = v[0] + sx * v[2];
         v[1] = v[1] + sy * v[2];
     }
-    let e0 = R::difference_of_products(t[1][0], t[2][1], t[1][1], t[2][0]);
-    let e1 = R::difference_of_products(t[2][0], t[0][1], t[2][1], t[0][0]);
-    let e2 = R::difference_of_products(t[0][0], t[1][1], t[0][1], t[1][0]);
+    // Plain products, not FMA-based differences: without a target FMA,
+    // `mul_add` is a library call (~2x slower here, BENCHMARKS.md). They stay
+    // watertight: a shared edge's function is computed from the same operands
+    // in both triangles and comes out exactly negated; an exact zero goes to f64.
+    let e0 = t[1][0] * t[2][1] - t[1][1] * t[2][0];
+    let e1 = t[2][0] * t[0][1] - t[2][1] * t[0][0];
+    let e2 = t[0][0] * t[1][1] - t[0][1] * t[1][0];
     if exact_zero_is_undecided && (e0 == R::ZERO || e1 == R::ZERO || e2 == R::ZERO) {
         return Core::Undecided;
     }
