@@ -6,5 +6,6 @@ mod hygiene;
 mod loading;
 mod panics;
 mod refusals;
+mod shading;
 mod silhouette;
 mod whitted;

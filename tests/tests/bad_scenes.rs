@@ -224,3 +224,17 @@ fn bad_output_extension_is_refused_before_rendering() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains(".png or .exr"));
 }
+
+#[test]
+fn singular_transform() {
+    bad("{ object = \"ball\" }", "{ object = \"ball\", transform = [{ translate = [1.0, 0.0, 0.0] }, { scale = [1.0, 0.0, 1.0] }] }", &["scene.toml:17:", "objects.world.children[0]", "key `transform[1]`", "singular"]);
+}
+
+#[test]
+fn transform_step_with_two_keys() {
+    bad(
+        "{ object = \"ball\" }",
+        "{ object = \"ball\", transform = [{ scale = 2.0, rotate_y = 3.0 }] }",
+        &["key `transform[0]`", "exactly one key"],
+    );
+}

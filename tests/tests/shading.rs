@@ -1,0 +1,168 @@
+//! Closed forms for mirror reflection and refraction, attribute blocks, PNG encoding.
+
+use rtk_tests::*;
+
+fn sphere_scene(shader: &str, extra: &str) -> String {
+    format!(
+        r#"
+[render]
+width = 48
+height = 48
+root = "world"
+background = [0.2, 0.4, 0.6]
+integrator = {{ class = "whitted", max_depth = 64 }}
+[cameras.c]
+class = "pinhole"
+eye = [0.0, 0.0, 4.0]
+fov_y = 40.0
+[shaders.s]
+{shader}
+[objects.ball]
+class = "sphere"
+[objects.world]
+class = "list"
+children = [{{ object = "ball", shader = "s" }}]
+{extra}
+"#
+    )
+}
+
+const BG: [f32; 3] = [0.2, 0.4, 0.6];
+
+/// Pixels whose centre ray hits the unit sphere well inside its silhouette.
+fn interior_pixels() -> Vec<(u32, u32)> {
+    let t = (20f64).to_radians().tan();
+    let mut v = vec![];
+    for y in 0..48 {
+        for x in 0..48 {
+            let (sx, sy) = (
+                (2.0 * (x as f64 + 0.5) / 48.0 - 1.0) * t,
+                (1.0 - 2.0 * (y as f64 + 0.5) / 48.0) * t,
+            );
+            // distance of the ray from the centre, eye at distance 4
+            let d = 4.0 * (sx * sx + sy * sy).sqrt() / (1.0 + sx * sx + sy * sy).sqrt();
+            if d < 0.9 {
+                v.push((x, y));
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn mirror_sphere_reflects_the_background_times_kr() {
+    // A convex mirror cannot see itself: every reflected ray escapes.
+    let (run, img) = render_scene(
+        &sphere_scene(
+            "class = \"phong\"\ndiffuse = [0.0, 0.0, 0.0]\nmirror = [0.5, 0.25, 1.0]",
+            "",
+        ),
+        &["--stats"],
+    );
+    assert!(run.ok, "{}", run.stderr);
+    let img = img.unwrap();
+    let px = interior_pixels();
+    assert!(px.len() > 300);
+    for (x, y) in px {
+        let p = img.px(x, y);
+        for (c, e) in p.iter().zip([0.5 * BG[0], 0.25 * BG[1], BG[2]]) {
+            assert!((c - e).abs() < 1e-6, "({x},{y}): {p:?}");
+        }
+    }
+    let s = run.stats();
+    assert!(s["rays"]["reflection"].as_u64().unwrap() > 300);
+    assert_eq!(s["rays"]["shadow"], 0, "no lights, no shadow rays");
+}
+
+#[test]
+fn clear_glass_sphere_conserves_the_background() {
+    // Fresnel splits each ray into reflected and refracted parts that sum to
+    // one; with no absorption and a uniform background, every pixel sees it.
+    let (run, img) = render_scene(
+        &sphere_scene("class = \"phong\"\ndiffuse = [0.0, 0.0, 0.0]\ntransmission = [1.0, 1.0, 1.0]\nior = 1.5", ""),
+        &["--stats"],
+    );
+    assert!(run.ok, "{}", run.stderr);
+    let img = img.unwrap();
+    for (x, y) in interior_pixels() {
+        let p = img.px(x, y);
+        for (c, e) in p.iter().zip(BG) {
+            assert!((c - e).abs() < 1e-4 * e, "({x},{y}): {p:?}");
+        }
+    }
+    let s = run.stats();
+    assert!(
+        s["rays"]["refraction"].as_u64().unwrap() > 600,
+        "rays enter and leave"
+    );
+    // Reaching depth 64 would lose energy; some paths do bounce inside many times.
+    assert!(
+        s["rays"]["reflection"].as_u64().unwrap() > s["rays"]["refraction"].as_u64().unwrap() / 2
+    );
+}
+
+#[test]
+fn attribute_blocks_override_the_shader_per_instance() {
+    let scene = sphere_scene("class = \"flat\"\ncolor = [0.5, 0.5, 0.5]", "")
+        .replace(
+            "children = [{ object = \"ball\", shader = \"s\" }]",
+            "children = [{ object = \"ball\", shader = \"s\", transform = [{ translate = [-1.2, 0.0, 0.0] }] },\n\
+             { object = \"ball\", shader = \"s\", attributes = { color = [0.0, 1.0, 0.25] }, transform = [{ translate = [1.2, 0.0, 0.0] }] }]",
+        )
+        .replace("eye = [0.0, 0.0, 4.0]", "eye = [0.0, 0.0, 8.0]");
+    let (run, img) = render_scene(&scene, &["--stats"]);
+    assert!(run.ok, "{}", run.stderr);
+    let img = img.unwrap();
+    // Left sphere: the shader's colour; right sphere: the attributes'.
+    assert_eq!(img.px(14, 24), [0.5, 0.5, 0.5]);
+    assert_eq!(img.px(33, 24), [0.0, 1.0, 0.25]);
+    assert_eq!(run.stats()["shaders_created"], 2);
+
+    // The same through PNG: sRGB encoding of 0.5 is 188, of 0.25 is 137.
+    let dir = tempfile::tempdir().unwrap();
+    let sp = dir.path().join("s.toml");
+    std::fs::write(&sp, &scene).unwrap();
+    let out = dir.path().join("o.png");
+    let r = rtk(&[
+        "render",
+        sp.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-q",
+    ])
+    .output()
+    .unwrap();
+    assert!(r.status.success());
+    let png = image::open(&out).unwrap().into_rgb8();
+    assert_eq!(png.get_pixel(14, 24).0, [188, 188, 188]);
+    assert_eq!(png.get_pixel(33, 24).0, [0, 255, 137]);
+}
+
+#[test]
+fn attribute_errors_point_into_the_attribute_block() {
+    let scene = sphere_scene("class = \"flat\"", "").replace(
+        "{ object = \"ball\", shader = \"s\" }",
+        "{ object = \"ball\", shader = \"s\", attributes = { colour = [1, 0, 0] } }",
+    );
+    let (run, _) = render_scene(&scene, &[]);
+    assert!(!run.ok);
+    assert!(
+        run.stderr.contains("key `colour`")
+            && run.stderr.contains("(attributes)")
+            && run.stderr.contains("scene.toml:18:"),
+        "{}",
+        run.stderr
+    );
+}
+
+#[test]
+fn transform_class_used_directly_with_steps() {
+    let scene = sphere_scene("class = \"flat\"", "[objects.moved]\nclass = \"transform\"\nsteps = [{ scale = 0.25 }, { translate = [1.0, 0.0, 0.0] }]\nchildren = [\"ball\"]\n")
+        .replace("{ object = \"ball\", shader = \"s\" }", "{ object = \"moved\", shader = \"s\" }");
+    let (run, img) = render_scene(&scene, &[]);
+    assert!(run.ok, "{}", run.stderr);
+    let img = img.unwrap();
+    assert_eq!(img.px(24, 24), BG, "the centre shows the background now");
+    // x = 1 at distance 4 with fov 40: pixel 24 + 24 * (1/4)/tan(20°) ≈ 40.5
+    assert_eq!(img.px(40, 24), [1.0, 1.0, 1.0]);
+}
