@@ -48,3 +48,15 @@ fn panic_in_intersect() {
         r.stderr
     );
 }
+
+#[test]
+fn panic_in_a_parallel_for_task() {
+    let r = run("parallel_task");
+    assert!(!r.ok);
+    assert!(
+        r.stderr
+            .contains("plugin 'panicky' panicked in prepare: a parallel_for task panicked"),
+        "{}",
+        r.stderr
+    );
+}

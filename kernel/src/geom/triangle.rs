@@ -306,6 +306,94 @@ mod tests {
         }
     }
 
+    /// numerics.md T2 (pbrt-v4's `Triangle.Watertight` recipe): a 16x16 UV
+    /// sphere with vertex radii jittered in [1, 6] and exactly shared poles
+    /// and seam; rays from inside the r = 0.5 ball aimed exactly at vertices
+    /// and at random, with the mesh at |c| = 0, 1e3 and 1e5 — every ray must
+    /// hit some triangle.
+    #[test]
+    fn closed_mesh_has_no_leaks() {
+        let (nt, np) = (16usize, 16usize);
+        let mut s = 17u64;
+        for &c in &[0.0f64, 1e3, 1e5] {
+            let mut verts: Vec<[f64; 3]> = vec![
+                [0.0, 0.0, 1.0 + 5.0 * lcg(&mut s)],
+                [0.0, 0.0, -(1.0 + 5.0 * lcg(&mut s))],
+            ];
+            for i in 1..nt {
+                let th = std::f64::consts::PI * i as f64 / nt as f64;
+                for j in 0..np {
+                    let ph = std::f64::consts::TAU * j as f64 / np as f64;
+                    let r = 1.0 + 5.0 * lcg(&mut s);
+                    verts.push([
+                        r * th.sin() * ph.cos(),
+                        r * th.sin() * ph.sin(),
+                        r * th.cos(),
+                    ]);
+                }
+            }
+            let idx = |i: usize, j: usize| 2 + (i - 1) * np + (j % np);
+            let mut tris = Vec::new();
+            for j in 0..np {
+                tris.push([0, idx(1, j), idx(1, j + 1)]);
+                tris.push([1, idx(nt - 1, j + 1), idx(nt - 1, j)]);
+                for i in 1..nt - 1 {
+                    tris.push([idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)]);
+                    tris.push([idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)]);
+                }
+            }
+            let v32: Vec<[f32; 3]> = verts
+                .iter()
+                .map(|v| {
+                    [
+                        (v[0] + c) as f32,
+                        (v[1] + c * 0.5) as f32,
+                        (v[2] - c * 0.25) as f32,
+                    ]
+                })
+                .collect();
+            let mut leaks = 0;
+            for k in 0..40_000 {
+                let o64 = loop {
+                    let p = [lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5];
+                    if p.iter().map(|x| x * x).sum::<f64>() < 0.25 {
+                        break p;
+                    }
+                };
+                let o = [
+                    (o64[0] + c) as f32,
+                    (o64[1] + c * 0.5) as f32,
+                    (o64[2] - c * 0.25) as f32,
+                ];
+                let target: [f64; 3] = if k % 2 == 0 {
+                    let v = v32[(lcg(&mut s) * v32.len() as f64) as usize % v32.len()];
+                    [v[0] as f64, v[1] as f64, v[2] as f64]
+                } else {
+                    [
+                        o[0] as f64 + lcg(&mut s) - 0.5,
+                        o[1] as f64 + lcg(&mut s) - 0.5,
+                        o[2] as f64 + lcg(&mut s) - 0.5,
+                    ]
+                };
+                let d64 = [
+                    target[0] - o[0] as f64,
+                    target[1] - o[1] as f64,
+                    target[2] - o[2] as f64,
+                ];
+                let l = (d64[0] * d64[0] + d64[1] * d64[1] + d64[2] * d64[2]).sqrt();
+                let d = d64.map(|x| (x / l) as f32);
+                let hit = tris.iter().any(|t: &[usize; 3]| {
+                    intersect_triangle(o, d, [v32[t[0]], v32[t[1]], v32[t[2]]], 0.0, f32::INFINITY)
+                        .is_some()
+                });
+                if !hit {
+                    leaks += 1;
+                }
+            }
+            assert_eq!(leaks, 0, "leaks at |c| = {c}");
+        }
+    }
+
     /// numerics.md T4: huge coordinates never give a non-finite t.
     #[test]
     fn huge_coordinates_never_non_finite() {
