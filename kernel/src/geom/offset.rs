@@ -56,3 +56,145 @@ pub fn spawn_ray_to(g: &LocalGeom, to: Vec3, parent: &Ray) -> Ray {
         generation: parent.generation + 1,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{
+        intersect_sphere, intersect_triangle, nearest_root, sphere_point_and_error,
+        triangle_point_and_error,
+    };
+
+    fn lcg(s: &mut u64) -> f32 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*s >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    fn hemisphere(s: &mut u64, n: Vec3) -> Vec3 {
+        loop {
+            let v = Vec3::new(lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0);
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                let v = v / l.sqrt();
+                return if v.dot(n) < 0.0 { -v } else { v };
+            }
+        }
+    }
+
+    fn geom(p: [f32; 3], e: [f32; 3], n: Vec3) -> LocalGeom {
+        LocalGeom {
+            p: p.into(),
+            p_err: e.into(),
+            ng: n.into(),
+            ns: n.into(),
+            ..LocalGeom::EMPTY
+        }
+    }
+
+    /// numerics.md S1: rays spawned from triangle hits, over the hemisphere
+    /// the incoming ray came from, never re-hit the triangle, at every scale.
+    #[test]
+    fn no_self_hits_off_triangles() {
+        let mut s = 21u64;
+        for &(mag, size) in &[
+            (1.0f32, 1.0f32),
+            (1e3, 1.0),
+            (1e5, 1.0),
+            (1.0, 1e-3),
+            (1e4, 1e2),
+        ] {
+            let mut rehits = 0;
+            for _ in 0..2000 {
+                let c = Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5)
+                    .normalize()
+                    * mag;
+                let v: [[f32; 3]; 3] = std::array::from_fn(|_| {
+                    (c + Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5) * size)
+                        .to_array()
+                });
+                let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
+                let n = (p1 - p0).cross(p2 - p0).normalize();
+                let target = p0 * 0.3 + p1 * 0.3 + p2 * 0.4;
+                let o = target + hemisphere(&mut s, n) * size * 2.0;
+                let d = (target - o).normalize();
+                let Some(h) = intersect_triangle(o.to_array(), d.to_array(), v, 0.0, f32::INFINITY)
+                else {
+                    continue;
+                };
+                let (p, e) = triangle_point_and_error(v, h.b);
+                let g = geom(p, e, n);
+                let incoming_side = if (-d).dot(n) > 0.0 { n } else { -n };
+                let parent = Ray::new(o, d);
+                for _ in 0..50 {
+                    let r = spawn_ray(&g, hemisphere(&mut s, incoming_side), &parent);
+                    if intersect_triangle(
+                        r.origin.to_array(),
+                        r.dir.to_array(),
+                        v,
+                        r.t_min,
+                        r.t_max,
+                    )
+                    .is_some()
+                    {
+                        rehits += 1;
+                    }
+                }
+            }
+            assert_eq!(rehits, 0, "|p| = {mag}, size {size}");
+        }
+    }
+
+    /// The same off spheres: outward rays never re-hit, inward rays reach
+    /// the far side (never the near surface at t ~ 0).
+    #[test]
+    fn no_self_hits_off_spheres() {
+        let mut s = 5u64;
+        for &(mag, r) in &[
+            (0.0f32, 1.0f32),
+            (1e3, 1.0),
+            (1e4, 10.0),
+            (0.0, 1e-3),
+            (100.0, 1e-2),
+        ] {
+            let c = Vec3::new(0.6, -0.8, 0.0) * mag;
+            let (mut rehits, mut misses) = (0, 0);
+            for _ in 0..2000 {
+                let o = c + Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, 2.0) * r * 3.0;
+                let d =
+                    (c + Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, 0.0) * r - o).normalize();
+                let Some(h) = intersect_sphere(c.to_array(), r, o.to_array(), d.to_array()) else {
+                    continue;
+                };
+                let Some(t) = nearest_root(&h, 0.0, f32::INFINITY) else {
+                    continue;
+                };
+                let (p, e) = sphere_point_and_error(c.to_array(), r, o.to_array(), d.to_array(), t);
+                let n = (Vec3::from(p) - c).normalize();
+                let g = geom(p, e, n);
+                let parent = Ray::new(o, d);
+                for k in 0..50 {
+                    let out = k % 2 == 0;
+                    let dir = hemisphere(&mut s, if out { n } else { -n });
+                    let ray = spawn_ray(&g, dir, &parent);
+                    let hit = intersect_sphere(
+                        c.to_array(),
+                        r,
+                        ray.origin.to_array(),
+                        ray.dir.to_array(),
+                    )
+                    .and_then(|h| nearest_root(&h, ray.t_min, ray.t_max));
+                    match (out, hit) {
+                        (true, Some(_)) => rehits += 1,
+                        // The far side lies at the chord 2r cos(angle to -n).
+                        (false, Some(t)) if t < 0.5 * 2.0 * r * dir.dot(-n) => rehits += 1,
+                        (false, None) => misses += 1,
+                        _ => {}
+                    }
+                }
+            }
+            assert_eq!((rehits, misses), (0, 0), "|c| = {mag}, r = {r}");
+        }
+    }
+}
