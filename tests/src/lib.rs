@@ -158,9 +158,8 @@ pub fn other_abi_dir() -> &'static Path {
              [dependencies]\nrtk-kernel = { path = \"../kernel\" }\n\n[workspace]\n\n[profile.dev.package.\"*\"]\nopt-level = 3\n",
         )
         .expect("toml");
-        let lib = std::fs::read_to_string(root().join("tests/fixtures/panicky/src/lib.rs"))
-            .expect("panicky source")
-            .replace("\"panicky\"", "\"otherabi\"");
+        let lib = std::fs::read_to_string(root().join("tests/fixtures/panicky/src/body.rs")).expect("panicky source")
+            + "\nrtk_kernel::export_object!(Panicky, class = \"otherabi\", doc = \"Test fixture: another kernel ABI.\");\n";
         std::fs::write(plug.join("src/lib.rs"), lib).expect("lib.rs");
         let _ = std::fs::copy(root().join("tests/fixtures/Cargo.lock"), plug.join("Cargo.lock"));
         let ftarget = target.join("fixtures");

@@ -85,6 +85,28 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     0.5 * (r_par * r_par + r_perp * r_perp)
 }
 
+/// Sample a diffuse lobe: a cosine-distributed `wi` on the side of the
+/// shading normal that `wo` is on, and its density.
+#[inline]
+pub fn cosine_sample(g: &LocalGeom, wo: Vec3, u: [f32; 2]) -> Option<(Vec3, f32)> {
+    let n = g.ns.v();
+    let n = if n.dot(wo) < 0.0 { -n } else { n };
+    let wi = cosine_hemisphere(n, u);
+    let pdf = n.dot(wi).max(0.0) * std::f32::consts::FRAC_1_PI;
+    (pdf > 0.0).then_some((wi, pdf))
+}
+
+/// Density of [`cosine_sample`] choosing `wi` (0 on the other side).
+#[inline]
+pub fn cosine_pdf(g: &LocalGeom, wo: Vec3, wi: Vec3) -> f32 {
+    let n = g.ns.v();
+    if n.dot(wo) * n.dot(wi) > 0.0 {
+        n.dot(wi).abs() * std::f32::consts::FRAC_1_PI
+    } else {
+        0.0
+    }
+}
+
 /// A cosine-distributed direction around `n`, from two uniform numbers.
 #[inline]
 pub fn cosine_hemisphere(n: Vec3, u: [f32; 2]) -> Vec3 {

@@ -1,7 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::shading::{cosine_hemisphere, direct_light};
+use rtk_kernel::sdk::shading::{cosine_pdf, cosine_sample, direct_light};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::f32::consts::FRAC_1_PI;
@@ -57,11 +57,8 @@ impl Shader for Lambert {
         wo: Vec3,
         u: [f32; 2],
     ) -> Option<BsdfSample> {
-        let n = g.ns.v();
-        let n = if n.dot(wo) < 0.0 { -n } else { n };
-        let wi = cosine_hemisphere(n, u);
-        let pdf = n.dot(wi).max(0.0) * FRAC_1_PI;
-        (pdf > 0.0).then(|| BsdfSample {
+        let (wi, pdf) = cosine_sample(g, wo, u)?;
+        Some(BsdfSample {
             wi: wi.into(),
             f: self.f,
             pdf,
@@ -70,12 +67,7 @@ impl Shader for Lambert {
     }
 
     fn pdf(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> f32 {
-        let n = g.ns.v();
-        if n.dot(wo) * n.dot(wi) > 0.0 {
-            n.dot(wi).abs() * FRAC_1_PI
-        } else {
-            0.0
-        }
+        cosine_pdf(g, wo, wi)
     }
 
     const SHADES: bool = true;

@@ -3,7 +3,7 @@
 use rtk_kernel::geom::spawn_ray;
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::{
-    cosine_hemisphere, direct_light, fresnel_dielectric, reflect, refract,
+    cosine_pdf, cosine_sample, direct_light, fresnel_dielectric, reflect, refract,
 };
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -104,12 +104,8 @@ impl Shader for Phong {
         wo: Vec3,
         u: [f32; 2],
     ) -> Option<BsdfSample> {
-        // Diffuse-lobe sampling; the delta lobes are handled by `shade`.
-        let n = g.ns.v();
-        let n = if n.dot(wo) < 0.0 { -n } else { n };
-        let wi = cosine_hemisphere(n, u);
-        let pdf = n.dot(wi).max(0.0) * FRAC_1_PI;
-        (pdf > 0.0).then(|| BsdfSample {
+        let (wi, pdf) = cosine_sample(g, wo, u)?;
+        Some(BsdfSample {
             wi: wi.into(),
             f: self.brdf(g, wo, wi),
             pdf,
@@ -118,12 +114,7 @@ impl Shader for Phong {
     }
 
     fn pdf(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> f32 {
-        let n = g.ns.v();
-        if n.dot(wo) * n.dot(wi) > 0.0 {
-            n.dot(wi).abs() * FRAC_1_PI
-        } else {
-            0.0
-        }
+        cosine_pdf(g, wo, wi)
     }
 
     const SHADES: bool = true;
