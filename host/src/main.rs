@@ -101,6 +101,9 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("rtk-render-{i}"))
+        // Whitted recursion goes through plugin frames at every bounce
+        // (max_depth up to 1024): a roomy stack, committed only as used.
+        .stack_size(64 << 20)
         .build()
         .context("starting the thread pool")?;
     let mut sets = a.set.clone();

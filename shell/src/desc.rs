@@ -125,6 +125,9 @@ impl SceneFile {
     }
 }
 
+/// Largest image, in pixels (the f64 film takes 24 bytes a pixel).
+pub const MAX_PIXELS: u64 = 1 << 28;
+
 /// `[render]` settings.
 #[derive(Debug, Clone)]
 pub struct Render {
@@ -622,6 +625,14 @@ impl Desc {
         let width = int("width", 512, 1, 65536)? as u32;
         let height = int("height", 384, 1, 65536)? as u32;
         let spp = int("spp", 1, 1, 1 << 24)? as u32;
+        if width as u64 * height as u64 > MAX_PIXELS {
+            return Err(cx.err(
+                &r.get("width").unwrap_or(r).origin,
+                obj,
+                "width",
+                format!("{width}x{height} is more than rtk's limit of {MAX_PIXELS} pixels; render it in crops"),
+            ));
+        }
         let seed = int("seed", 0, 0, i64::MAX)? as u64;
         let (camera, camera_origin) = match r.get("camera") {
             Some(n) => (cx.string(n, obj, "camera")?, n.origin.clone()),

@@ -238,3 +238,12 @@ fn transform_step_with_two_keys() {
         &["key `transform[0]`", "exactly one key"],
     );
 }
+
+#[test]
+fn image_too_large() {
+    bad(
+        "width = 8\nheight = 8",
+        "width = 65536\nheight = 65536",
+        &["scene.toml:2:9", "key `width`", "limit"],
+    );
+}

@@ -166,3 +166,45 @@ fn transform_class_used_directly_with_steps() {
     // x = 1 at distance 4 with fov 40: pixel 24 + 24 * (1/4)/tan(20°) ≈ 40.5
     assert_eq!(img.px(40, 24), [1.0, 1.0, 1.0]);
 }
+
+/// Two facing mirrors: no ray ever escapes, so every camera ray spawns
+/// exactly `max_depth + 1` reflection rays (the last returns black at once),
+/// and the image is black. Depth 1024 must not overflow any stack.
+#[test]
+fn facing_mirrors_stop_exactly_at_the_depth_limit() {
+    for depth in [40u64, 1024] {
+        let scene = format!(
+            r#"
+[render]
+width = 16
+height = 16
+root = "world"
+background = [1.0, 1.0, 1.0]
+integrator = {{ class = "whitted", max_depth = {depth} }}
+[cameras.c]
+class = "pinhole"
+eye = [0.0, 0.0, 0.0]
+look_at = [1.0, 0.0, 0.0]
+fov_y = 10.0
+[shaders.m]
+class = "phong"
+diffuse = [0.0, 0.0, 0.0]
+mirror = [0.99, 0.99, 0.99]
+[objects.plane]
+class = "mesh"
+file = "{floor}"
+[objects.world]
+class = "list"
+children = [
+  {{ object = "plane", shader = "m", transform = [{{ scale = 1000.0 }}, {{ rotate_z = 90.0 }}, {{ translate = [1.0, 0.0, 0.0] }}] }},
+  {{ object = "plane", shader = "m", transform = [{{ scale = 1000.0 }}, {{ rotate_z = 90.0 }}, {{ translate = [-1.0, 0.0, 0.0] }}] }},
+]
+"#,
+            floor = root().join("scenes/meshes/floor.obj").display()
+        );
+        let (run, img) = render_scene(&scene, &["--stats"]);
+        assert!(run.ok, "{}", run.stderr);
+        assert_eq!(run.stats()["rays"]["reflection"], 256 * (depth + 1));
+        assert!(img.unwrap().data.iter().all(|&v| v == 0.0));
+    }
+}
