@@ -59,7 +59,7 @@ impl SceneFile {
                     &origin,
                     "",
                     "",
-                    format!("TOML syntax error: {msg}"),
+                    msg,
                 ))
             }
         }
@@ -697,7 +697,23 @@ impl Desc {
                 d.class = class;
                 d
             }
-            Some(n) => cx.def("render", "integrator", n, &[])?,
+            Some(
+                n @ Node {
+                    value: Val::Table(_),
+                    ..
+                },
+            ) => cx.def("render", "integrator", n, &[])?,
+            Some(n) => {
+                return Err(cx.err(
+                    &n.origin,
+                    obj,
+                    "integrator",
+                    format!(
+                        "expected a class name or a table {{ class = \"...\", ... }}, found {}",
+                        n.value.type_name()
+                    ),
+                ))
+            }
         };
         let background = match r.get("background") {
             None => [0.0; 3],

@@ -245,7 +245,18 @@ impl<'de> Visitor<'de> for ValVisitor {
 /// Parse a TOML document. On a syntax error returns the message and the byte
 /// range it concerns.
 pub fn parse(src: &str) -> Result<Node, (String, Option<Range<usize>>)> {
-    let val: Val = toml::from_str(src).map_err(|e| (e.message().to_string(), e.span()))?;
+    let val: Val = toml::from_str(src).map_err(|e| {
+        let msg = e.message().trim_end().to_string();
+        // toml hands a date-time to a spanned value as a private marker.
+        if msg.contains("$__toml_private_datetime") {
+            (
+                "date-times are not used in rtk scenes".to_string(),
+                e.span(),
+            )
+        } else {
+            (format!("TOML syntax error: {msg}"), e.span())
+        }
+    })?;
     Ok(Node {
         origin: Origin::File(0..src.len()),
         value: val,

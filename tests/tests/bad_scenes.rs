@@ -247,3 +247,25 @@ fn image_too_large() {
         &["scene.toml:2:9", "key `width`", "limit"],
     );
 }
+
+#[test]
+fn date_time_value() {
+    bad(
+        "width = 8",
+        "width = 1979-05-27",
+        &["scene.toml:2:9", "date-times are not used"],
+    );
+}
+
+#[test]
+fn integrator_of_the_wrong_type() {
+    bad(
+        "integrator = \"normals\"",
+        "integrator = 5",
+        &[
+            "scene.toml:5:14",
+            "key `integrator`",
+            "class name or a table",
+        ],
+    );
+}

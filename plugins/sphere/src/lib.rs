@@ -50,7 +50,10 @@ impl Object for Sphere {
         if p.radius < f32::MIN_POSITIVE || p.radius > 1e12 {
             return Err(PluginError::key(
                 "radius",
-                format!("{} is outside the range f32 handles", p.radius),
+                format!(
+                    "{:e} is outside the range f32 handles (1.2e-38 to 1e12)",
+                    p.radius
+                ),
             ));
         }
         Ok(Sphere {
