@@ -127,47 +127,79 @@ pub fn fixtures_dir() -> &'static Path {
 /// `generation` field is `u64`): a copy of `kernel/` edited at test time.
 pub fn other_abi_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let (target, profile) = target_and_profile();
-        let src = target.join("fixture-src/other-abi");
-        let _ = std::fs::remove_dir_all(&src);
-        copy_dir(&root().join("kernel"), &src.join("kernel"));
+    DIR.get_or_init(|| other_kernel_plugin("otherabi", "0.1.0", true))
+}
+
+/// A plugin built against another kernel version (0.2.0), records unchanged.
+pub fn other_version_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| other_kernel_plugin("otherversion", "0.2.0", false))
+}
+
+/// Build the panicky fixture as class `class` against a copy of `kernel/`
+/// with version `version`, its `Ray` record edited if `edit_ray`.
+fn other_kernel_plugin(class: &str, version: &str, edit_ray: bool) -> PathBuf {
+    let (target, profile) = target_and_profile();
+    let src = target.join("fixture-src").join(class);
+    let _ = std::fs::remove_dir_all(&src);
+    copy_dir(&root().join("kernel"), &src.join("kernel"));
+    if edit_ray {
         let abi = src.join("kernel/src/abi.rs");
         let text = std::fs::read_to_string(&abi).expect("abi.rs");
         let edited = text.replacen("pub generation: u32,", "pub generation: u64,", 1);
         assert_ne!(text, edited, "the edit must change the Ray record");
         std::fs::write(&abi, edited).expect("write abi.rs");
-        // The copy inherits nothing from the main workspace.
-        let toml = std::fs::read_to_string(src.join("kernel/Cargo.toml")).expect("kernel toml");
-        let toml = toml
-            .replace("rust-version.workspace = true", "")
-            .replace("version.workspace = true", "version = \"0.1.0\"")
-            .replace("edition.workspace = true", "edition = \"2021\"")
-            .replace("license.workspace = true", "")
-            .replace("abi_stable.workspace = true", "abi_stable = \"0.11.3\"")
-            .replace("serde.workspace = true", "serde = { version = \"1\", features = [\"derive\"] }")
-            .replace("serde_json.workspace = true", "serde_json = \"1\"")
-            .replace("serde_path_to_error.workspace = true", "serde_path_to_error = \"0.1\"")
-            .replace("glam.workspace = true", "glam = \"0.30\"");
-        std::fs::write(src.join("kernel/Cargo.toml"), toml).expect("kernel toml");
-        let plug = src.join("otherabi");
-        std::fs::create_dir_all(plug.join("src")).expect("mkdir");
-        std::fs::write(
-            plug.join("Cargo.toml"),
-            "[package]\nname = \"rtk_otherabi\"\nversion = \"0.1.0\"\nedition = \"2021\"\n\n[lib]\ncrate-type = [\"cdylib\"]\n\n\
-             [dependencies]\nrtk-kernel = { path = \"../kernel\" }\n\n[workspace]\n\n[profile.dev.package.\"*\"]\nopt-level = 3\n",
+    }
+    // The copy inherits nothing from the main workspace.
+    let toml = std::fs::read_to_string(src.join("kernel/Cargo.toml")).expect("kernel toml");
+    let toml = toml
+        .replace("rust-version.workspace = true", "")
+        .replace(
+            "version.workspace = true",
+            &format!("version = \"{version}\""),
         )
-        .expect("toml");
-        let lib = std::fs::read_to_string(root().join("tests/fixtures/panicky/src/body.rs")).expect("panicky source")
-            + "\nrtk_kernel::export_object!(Panicky, class = \"otherabi\", doc = \"Test fixture: another kernel ABI.\");\n";
-        std::fs::write(plug.join("src/lib.rs"), lib).expect("lib.rs");
-        let _ = std::fs::copy(root().join("tests/fixtures/Cargo.lock"), plug.join("Cargo.lock"));
-        let ftarget = target.join("fixtures");
-        let mut c = cargo();
-        c.arg("build").arg("--manifest-path").arg(plug.join("Cargo.toml")).arg("--target-dir").arg(&ftarget).args(profile_args(&profile));
-        run_cargo(c, "the other-ABI fixture");
-        ftarget.join(&profile)
-    })
+        .replace("edition.workspace = true", "edition = \"2021\"")
+        .replace("license.workspace = true", "")
+        .replace("abi_stable.workspace = true", "abi_stable = \"0.11.3\"")
+        .replace(
+            "serde.workspace = true",
+            "serde = { version = \"1\", features = [\"derive\"] }",
+        )
+        .replace("serde_json.workspace = true", "serde_json = \"1\"")
+        .replace(
+            "serde_path_to_error.workspace = true",
+            "serde_path_to_error = \"0.1\"",
+        )
+        .replace("glam.workspace = true", "glam = \"0.30\"")
+        .replace("[lints]\nworkspace = true\n", "");
+    std::fs::write(src.join("kernel/Cargo.toml"), toml).expect("kernel toml");
+    let plug = src.join(class);
+    std::fs::create_dir_all(plug.join("src")).expect("mkdir");
+    std::fs::write(
+        plug.join("Cargo.toml"),
+        format!(
+            "[package]\nname = \"rtk_{class}\"\nversion = \"0.1.0\"\nedition = \"2021\"\n\n[lib]\ncrate-type = [\"cdylib\"]\n\n\
+             [dependencies]\nrtk-kernel = {{ path = \"../kernel\" }}\n\n[workspace]\n\n[profile.dev.package.\"*\"]\nopt-level = 3\n"
+        ),
+    )
+    .expect("toml");
+    let lib = std::fs::read_to_string(root().join("tests/fixtures/panicky/src/body.rs")).expect("panicky source")
+        + &format!("\nrtk_kernel::export_object!(Panicky, class = \"{class}\", doc = \"Test fixture: another kernel.\");\n");
+    std::fs::write(plug.join("src/lib.rs"), lib).expect("lib.rs");
+    let _ = std::fs::copy(
+        root().join("tests/fixtures/Cargo.lock"),
+        plug.join("Cargo.lock"),
+    );
+    let ftarget = target.join("fixtures");
+    let mut c = cargo();
+    c.arg("build")
+        .arg("--manifest-path")
+        .arg(plug.join("Cargo.toml"))
+        .arg("--target-dir")
+        .arg(&ftarget)
+        .args(profile_args(&profile));
+    run_cargo(c, &format!("the {class} fixture"));
+    ftarget.join(&profile)
 }
 
 fn copy_dir(from: &Path, to: &Path) {

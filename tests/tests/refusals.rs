@@ -47,6 +47,24 @@ fn a_plugin_built_against_another_kernel_abi_is_refused() {
 }
 
 #[test]
+fn a_plugin_built_against_another_kernel_version_is_refused() {
+    let run = run_with(other_version_dir(), "otherversion");
+    assert!(!run.ok);
+    let e = &run.stderr;
+    assert!(
+        e.contains("plugin 'otherversion'")
+            && e.contains("was built against rtk-kernel 0.2.0 (ABI 1)"),
+        "{e}"
+    );
+    assert!(
+        e.contains(
+            "this rtk uses rtk-kernel 0.1.0 (ABI 1). Rebuild the plugin against rtk-kernel 0.1.0."
+        ),
+        "{e}"
+    );
+}
+
+#[test]
 fn a_library_that_is_not_a_plugin_is_refused() {
     let run = run_with(fixtures_dir(), "notplugin");
     assert!(!run.ok);
