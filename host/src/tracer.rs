@@ -4,7 +4,6 @@
 //! statistics; nothing here allocates or locks.
 
 use rtk_kernel::abi::*;
-use rtk_kernel::glam::Vec3;
 use rtk_shell::World;
 use std::ffi::c_void;
 
@@ -242,43 +241,22 @@ extern "C" fn api_shade(
     }
 }
 
-/// Whitted shading for a material-only shader (no `shade`): direct light from
-/// every light through the material's `eval`, with shadow rays.
+/// Whitted shading for a material-only shader (no `shade`): its emission plus
+/// direct light through its `eval`, with the SDK's shadow-ray helper.
 fn direct_light(t: &Tracer, ctx: &mut TraceCtx, s: &ShaderFns, ray: &Ray, g: &LocalGeom) -> Color {
-    let wo = -ray.dir.v().normalize_or_zero();
-    let n = g.ns.v();
-    let mut sum = match s.emitted {
-        Some(e) => e(s.this, g, &wo.into()),
+    let wo: Float3 = (-ray.dir.v().normalize_or_zero()).into();
+    let emitted = match s.emitted {
+        Some(e) => e(s.this, g, &wo),
         None => Color::BLACK,
     };
-    for l in &t.lights {
-        let mut ls = LightSample::default();
-        ctx.stats.light_samples += 1;
-        if !(l.sample_li)(l.this, ctx, &g.p, &[0.5, 0.5], ray.time, &mut ls) || ls.pdf <= 0.0 {
-            continue;
-        }
-        let wi = ls.wi.v();
-        let cos = n.dot(wi).abs();
-        if cos == 0.0 {
-            continue;
-        }
-        let shadow = shadow_ray(g, wi, ls.dist, ray);
-        ctx.stats.rays[ray_kind::SHADOW as usize] += 1;
-        if (t.root.fns.occluded)(t.root.this, ctx, &shadow, 0) {
-            continue;
-        }
-        let f = (s.eval)(s.this, ctx, g, &wo.into(), &wi.into());
-        sum = sum.plus(f.times(ls.li).scale(cos / ls.pdf));
-    }
-    sum
-}
-
-fn shadow_ray(g: &LocalGeom, wi: Vec3, dist: f32, parent: &Ray) -> Ray {
-    let mut r = rtk_kernel::geom::spawn_ray(g, wi, parent);
-    if dist.is_finite() {
-        r.t_max = dist * (1.0 - rtk_kernel::geom::SHADOW_EPSILON);
-    }
-    r
+    let scene = rtk_kernel::Scene::new(&t.api);
+    emitted.plus(rtk_kernel::sdk::shading::direct_light(
+        ctx,
+        &scene,
+        ray,
+        g,
+        |ctx, wi| (s.eval)(s.this, ctx, g, &wo, &wi.into()),
+    ))
 }
 
 extern "C" fn api_background(host: *const c_void, ray: *const Ray) -> Color {

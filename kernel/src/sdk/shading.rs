@@ -9,13 +9,13 @@ use glam::Vec3;
 
 /// Sum over every light of `f(wi) * Li * |cos θ| / pdf`, each light's sample
 /// tested with one shadow ray (offset past the hit's error bound). `f` gets
-/// the unit direction towards the light.
+/// the context and the unit direction towards the light.
 pub fn direct_light(
     ctx: &mut TraceCtx,
     scene: &Scene,
     ray: &Ray,
     g: &LocalGeom,
-    mut f: impl FnMut(Vec3) -> Color,
+    mut f: impl FnMut(&mut TraceCtx, Vec3) -> Color,
 ) -> Color {
     let n = g.ns.v();
     let mut sum = Color::BLACK;
@@ -32,7 +32,7 @@ pub fn direct_light(
         if cos == 0.0 {
             continue;
         }
-        let fv = f(wi);
+        let fv = f(ctx, wi);
         if fv.is_black() {
             continue;
         }

@@ -73,7 +73,7 @@ impl Shader for Lambert {
     const SHADES: bool = true;
     fn shade(&self, ctx: &mut TraceCtx, scene: &Scene, ray: &Ray, g: &LocalGeom) -> Color {
         let wo = -ray.dir.v().normalize();
-        direct_light(ctx, scene, ray, g, |wi| self.brdf(g, wo, wi))
+        direct_light(ctx, scene, ray, g, |_, wi| self.brdf(g, wo, wi))
     }
 }
 

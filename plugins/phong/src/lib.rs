@@ -123,7 +123,7 @@ impl Shader for Phong {
         let mut l = if self.kd.is_black() && self.ks.is_black() {
             Color::BLACK
         } else {
-            direct_light(ctx, scene, ray, g, |wi| self.brdf(g, wo, wi))
+            direct_light(ctx, scene, ray, g, |_, wi| self.brdf(g, wo, wi))
         };
         if self.kr.is_black() && self.kt.is_black() {
             return l;
