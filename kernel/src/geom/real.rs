@@ -30,10 +30,6 @@ pub trait Real:
     fn is_finite(self) -> bool;
     /// Convert from f64 (rounding).
     fn from_f64(v: f64) -> Self;
-    /// Convert to f64 (exact).
-    fn to_f64(self) -> f64;
-    /// `a*b - c*d` with one rounding less (Kahan's algorithm via FMA).
-    fn difference_of_products(a: Self, b: Self, c: Self, d: Self) -> Self;
     /// Sign: -1 for negative, +1 otherwise.
     fn signum1(self) -> Self;
 }
@@ -60,17 +56,6 @@ macro_rules! impl_real {
             #[inline]
             fn from_f64(v: f64) -> Self {
                 v as $t
-            }
-            #[inline]
-            fn to_f64(self) -> f64 {
-                self as f64
-            }
-            #[inline]
-            fn difference_of_products(a: Self, b: Self, c: Self, d: Self) -> Self {
-                let cd = c * d;
-                let err = (-c).mul_add(d, cd);
-                let dop = a.mul_add(b, -cd);
-                dop + err
             }
             #[inline]
             fn signum1(self) -> Self {
