@@ -10,7 +10,6 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use rtk_kernel::abi::*;
 use rtk_kernel::geom::intersect_triangle;
 use rtk_shell::{PluginPath, Registry, Sequential};
-use std::ffi::c_void;
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
@@ -73,23 +72,8 @@ fn rays(n: usize) -> Vec<Ray> {
         .collect()
 }
 
-extern "C" fn ignore(_: *mut c_void, _: *const u8, _: usize, _: *const u8, _: usize) {}
-
 fn ctx() -> TraceCtx {
-    TraceCtx {
-        thread_index: 0,
-        max_threads: 1,
-        next_query: 0,
-        rng: RngState::default(),
-        scratch: std::ptr::null_mut(),
-        scratch_len: 0,
-        stats: Stats::default(),
-        failed: 0,
-        failure: FailureSink {
-            ctx: std::ptr::null_mut(),
-            report: ignore,
-        },
-    }
+    TraceCtx::new(0, 1, 0)
 }
 
 fn bench(c: &mut Criterion) {
@@ -125,7 +109,7 @@ fn bench(c: &mut Criterion) {
         });
         let world =
             rtk_shell::load(&sp, &[], &mut reg, &Sequential).unwrap_or_else(|e| panic!("{e}"));
-        let root_obj = world.root;
+        let root_obj = &world.root;
 
         // Both paths must find the same hits.
         let mut cx = ctx();
@@ -133,7 +117,7 @@ fn bench(c: &mut Criterion) {
             .iter()
             .map(|r| {
                 let mut h = Hit::new();
-                if (root_obj.fns.intersect)(root_obj.this, &mut cx, r, &mut h, 0) {
+                if root_obj.intersect(&mut cx, r, &mut h) {
                     h.t as f64
                 } else {
                     0.0
@@ -170,7 +154,7 @@ fn bench(c: &mut Criterion) {
                     let mut n = 0u32;
                     for r in rays {
                         let mut h = Hit::new();
-                        n += (root_obj.fns.intersect)(root_obj.this, &mut cx, r, &mut h, 0) as u32;
+                        n += root_obj.intersect(&mut cx, r, &mut h) as u32;
                     }
                     n
                 })

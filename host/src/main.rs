@@ -163,7 +163,7 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
             },
             "plugins_loaded": world.plugins.iter().map(|p| p.class.clone()).collect::<Vec<_>>(),
             "plugins_mapped": mapped,
-            "objects_created": world.objects_created(),
+            "objects_created": world.objects_created,
             "shaders_created": world.shaders.len(),
             "lights": world.lights.len(),
             "files_read": world.files_read,

@@ -5,14 +5,11 @@
 use crate::tracer::Tracer;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rtk_kernel::abi::*;
-use std::ffi::c_void;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 
 /// Edge of a square tile, in pixels.
 pub const TILE: u32 = 16;
-/// Per-thread scratch memory handed to plugins.
-pub const SCRATCH_BYTES: usize = 64 * 1024;
 
 /// A finished render.
 pub struct Film {
@@ -26,184 +23,194 @@ pub struct Film {
     pub stats: Stats,
 }
 
-/// Per-thread state that outlives tiles: the query counter (mailbox ids must
-/// never repeat on a thread) and the scratch memory.
-struct PerThread {
-    next_query: u64,
-    scratch: Vec<u8>,
-}
-
-/// The first failure reported by a plugin, and the flag that stops the render.
+/// The first plugin failure of the render, and the flag that stops the other
+/// threads. A failure is recorded in a thread's trace context by the plugin's
+/// SDK shim; the render loop reads the context after every camera sample.
 #[derive(Default)]
-pub struct Failure {
+struct Failure {
     stop: AtomicBool,
     first: Mutex<Option<String>>,
 }
 
-extern "C" fn report_failure(
-    ctx: *mut c_void,
-    class: *const u8,
-    clen: usize,
-    msg: *const u8,
-    mlen: usize,
-) {
-    // SAFETY: `ctx` is the render's `Failure`, alive for the render; the
-    // plugin passes valid byte ranges.
-    let (f, class, msg) = unsafe {
-        (
-            &*(ctx as *const Failure),
-            String::from_utf8_lossy(std::slice::from_raw_parts(class, clen)).into_owned(),
-            String::from_utf8_lossy(std::slice::from_raw_parts(msg, mlen)).into_owned(),
-        )
-    };
-    f.stop.store(true, Ordering::Relaxed);
-    if let Ok(mut first) = f.first.lock() {
-        first.get_or_insert_with(|| format!("plugin `{class}` {msg}"));
+impl Failure {
+    /// Take the failure recorded in `ctx`, if any; true when the render must stop.
+    fn check(&self, ctx: &TraceCtx) -> bool {
+        if let Some((class, msg)) = ctx.failure() {
+            self.stop.store(true, Ordering::Relaxed);
+            if let Ok(mut first) = self.first.lock() {
+                first.get_or_insert_with(|| format!("plugin `{class}` {msg}"));
+            }
+        }
+        self.stop.load(Ordering::Relaxed)
     }
 }
 
-/// Render the world's image with `threads` threads.
-pub fn render(tracer: &Tracer, pool: &rayon::ThreadPool, progress: bool) -> Result<Film, String> {
-    let world = tracer.world();
-    let r = &world.desc.render;
-    let (w, h, spp, seed) = (r.width, r.height, r.spp, r.seed);
-    let tiles_x = w.div_ceil(TILE);
-    let tiles_y = h.div_ceil(TILE);
-    let n_tiles = (tiles_x * tiles_y) as usize;
-    let threads = pool.current_num_threads();
-    let per_thread: Vec<Mutex<PerThread>> = (0..threads)
-        .map(|_| {
-            Mutex::new(PerThread {
-                next_query: 0,
-                scratch: vec![0; SCRATCH_BYTES],
-            })
-        })
-        .collect();
-    let failure = Failure::default();
-    let bar = if progress {
-        let b = ProgressBar::with_draw_target(Some(n_tiles as u64), ProgressDrawTarget::stderr());
-        b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} rendering [{bar:40}] {percent:>3}% tiles, {elapsed} elapsed, ETA {eta}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-        );
-        b
-    } else {
-        ProgressBar::hidden()
-    };
-    let camera = world.camera.module.generate_ray();
-    let cam_this = world.camera.this as *const c_void;
-    let cam = CamPtr(cam_this);
+/// One finished tile.
+struct Tile {
+    index: u32,
+    pixels: Vec<[f64; 3]>,
+    stats: Stats,
+}
 
-    let results: Vec<(u32, Vec<[f64; 3]>, Stats)> = pool.install(|| {
+/// What every tile needs to know.
+struct Job<'a, 'w> {
+    tracer: &'a Tracer<'w>,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u64,
+    tiles_x: u32,
+    threads: u32,
+    /// Per thread: the next query id (mailbox ids never repeat on a thread).
+    next_query: Vec<AtomicU64>,
+    failure: Failure,
+}
+
+/// Render the world's image on the pool's threads.
+pub fn render(tracer: &Tracer, pool: &rayon::ThreadPool, progress: bool) -> Result<Film, String> {
+    let r = &tracer.world().desc.render;
+    let threads = pool.current_num_threads();
+    let job = Job {
+        tracer,
+        width: r.width,
+        height: r.height,
+        spp: r.spp,
+        seed: r.seed,
+        tiles_x: r.width.div_ceil(TILE),
+        threads: threads as u32,
+        next_query: (0..threads).map(|_| AtomicU64::new(0)).collect(),
+        failure: Failure::default(),
+    };
+    let n_tiles = job.tiles_x * r.height.div_ceil(TILE);
+    let bar = progress_bar(n_tiles as u64, progress);
+    let tiles: Vec<Tile> = pool.install(|| {
         use rayon::prelude::*;
-        (0..n_tiles as u32)
+        (0..n_tiles)
             .into_par_iter()
-            .map(|tile| {
-                let ti = rayon::current_thread_index().unwrap_or(0);
-                let mut slot = per_thread[ti].lock().unwrap_or_else(|e| e.into_inner());
-                let PerThread {
-                    next_query,
-                    scratch,
-                } = &mut *slot;
-                let mut ctx = TraceCtx {
-                    thread_index: ti as u32,
-                    max_threads: threads as u32,
-                    next_query: *next_query,
-                    rng: RngState::default(),
-                    scratch: scratch.as_mut_ptr(),
-                    scratch_len: scratch.len(),
-                    stats: Stats::default(),
-                    failed: 0,
-                    failure: FailureSink {
-                        ctx: &failure as *const Failure as *mut c_void,
-                        report: report_failure,
-                    },
-                };
-                let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
-                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-                let mut px = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-                'rows: for y in y0..y1 {
-                    for x in x0..x1 {
-                        if failure.stop.load(Ordering::Relaxed) {
-                            break 'rows;
-                        }
-                        let pixel = y as u64 * w as u64 + x as u64;
-                        let mut sum = [0.0f64; 3];
-                        for s in 0..spp {
-                            ctx.rng = RngState::for_sample(seed, pixel, s as u64);
-                            // One sample: the pixel centre; more: uniform jitter.
-                            let (jx, jy) = if spp == 1 {
-                                (0.5, 0.5)
-                            } else {
-                                (ctx.rng.next_f32(), ctx.rng.next_f32())
-                            };
-                            let sample = CameraSample {
-                                film: [(x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32],
-                                lens: [ctx.rng.next_f32(), ctx.rng.next_f32()],
-                                time: ctx.rng.next_f32(),
-                            };
-                            let mut ray = Ray::new(Default::default(), Default::default());
-                            let weight = camera(cam.get(), &sample, &mut ray);
-                            if !weight.is_finite() {
-                                report_failure(
-                                    ctx.failure.ctx,
-                                    world.camera.class.as_ptr(),
-                                    world.camera.class.len(),
-                                    "panicked in generate_ray".as_ptr(),
-                                    "panicked in generate_ray".len(),
-                                );
-                                break 'rows;
-                            }
-                            let l = tracer.camera_li(&mut ctx, &ray).scale(weight);
-                            if l.is_finite() {
-                                sum[0] += l.r as f64;
-                                sum[1] += l.g as f64;
-                                sum[2] += l.b as f64;
-                            } else {
-                                ctx.stats.nonfinite_samples += 1;
-                            }
-                        }
-                        let inv = 1.0 / spp as f64;
-                        px.push([sum[0] * inv, sum[1] * inv, sum[2] * inv]);
-                    }
-                }
-                *next_query = ctx.next_query;
+            .map(|t| {
+                let tile = job.tile(t);
                 bar.inc(1);
-                (tile, px, ctx.stats)
+                tile
             })
             .collect()
     });
     bar.finish_and_clear();
-    if let Some(msg) = failure.first.lock().ok().and_then(|f| f.clone()) {
+    if let Some(msg) = job.failure.first.lock().ok().and_then(|f| f.clone()) {
         return Err(msg);
     }
-    let mut film = Film {
-        width: w,
-        height: h,
-        pixels: vec![[0.0; 3]; (w * h) as usize],
-        stats: Stats::default(),
-    };
-    for (tile, px, stats) in results {
-        let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
-        let x1 = (x0 + TILE).min(w);
-        let tw = (x1 - x0) as usize;
-        for (i, p) in px.into_iter().enumerate() {
-            let (x, y) = (x0 as usize + i % tw, y0 as usize + i / tw);
-            film.pixels[y * w as usize + x] = p;
-        }
-        film.stats.merge(&stats);
-    }
-    Ok(film)
+    Ok(job.assemble(tiles))
 }
 
-struct CamPtr(*const c_void);
-// SAFETY: the camera is immutable after creation and `Sync` by the SDK's contract.
-unsafe impl Sync for CamPtr {}
-impl CamPtr {
-    fn get(&self) -> *const c_void {
-        self.0
+fn progress_bar(n: u64, shown: bool) -> ProgressBar {
+    if !shown {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::with_draw_target(Some(n), ProgressDrawTarget::stderr());
+    b.set_style(
+        ProgressStyle::with_template(
+            "{spinner} rendering [{bar:40}] {percent:>3}% tiles, {elapsed} elapsed, ETA {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    b
+}
+
+impl Job<'_, '_> {
+    /// The pixel rectangle of tile `t`: (x0, y0, x1, y1).
+    fn rect(&self, t: u32) -> (u32, u32, u32, u32) {
+        let (x0, y0) = ((t % self.tiles_x) * TILE, (t / self.tiles_x) * TILE);
+        (
+            x0,
+            y0,
+            (x0 + TILE).min(self.width),
+            (y0 + TILE).min(self.height),
+        )
+    }
+
+    /// Render tile `t` on the calling pool thread.
+    fn tile(&self, t: u32) -> Tile {
+        let ti = rayon::current_thread_index().unwrap_or(0);
+        let counter = &self.next_query[ti];
+        let mut ctx = TraceCtx::new(ti as u32, self.threads, counter.load(Ordering::Relaxed));
+        let (x0, y0, x1, y1) = self.rect(t);
+        let mut pixels = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+        'rows: for y in y0..y1 {
+            for x in x0..x1 {
+                match self.pixel(&mut ctx, x, y) {
+                    Some(p) => pixels.push(p),
+                    None => break 'rows,
+                }
+            }
+        }
+        counter.store(ctx.query_counter(), Ordering::Relaxed);
+        Tile {
+            index: t,
+            pixels,
+            stats: ctx.stats,
+        }
+    }
+
+    /// The average of the pixel's samples; `None` once the render must stop.
+    fn pixel(&self, ctx: &mut TraceCtx, x: u32, y: u32) -> Option<[f64; 3]> {
+        let world = self.tracer.world();
+        let pixel = y as u64 * self.width as u64 + x as u64;
+        let mut sum = [0.0f64; 3];
+        for s in 0..self.spp {
+            ctx.rng = RngState::for_sample(self.seed, pixel, s as u64);
+            // One sample: the pixel centre; more: uniform jitter.
+            let (jx, jy) = if self.spp == 1 {
+                (0.5, 0.5)
+            } else {
+                (ctx.rng.next_f32(), ctx.rng.next_f32())
+            };
+            let sample = CameraSample {
+                film: [
+                    (x as f32 + jx) / self.width as f32,
+                    (y as f32 + jy) / self.height as f32,
+                ],
+                lens: [ctx.rng.next_f32(), ctx.rng.next_f32()],
+                time: ctx.rng.next_f32(),
+            };
+            let (ray, weight) = world.camera.generate_ray(ctx, &sample);
+            let l = if ctx.failed() {
+                Color::BLACK
+            } else {
+                self.tracer.camera_li(ctx, &ray).scale(weight)
+            };
+            if self.failure.check(ctx) {
+                return None;
+            }
+            if l.is_finite() {
+                sum[0] += l.r as f64;
+                sum[1] += l.g as f64;
+                sum[2] += l.b as f64;
+            } else {
+                ctx.stats.nonfinite_samples += 1;
+            }
+        }
+        let inv = 1.0 / self.spp as f64;
+        Some([sum[0] * inv, sum[1] * inv, sum[2] * inv])
+    }
+
+    /// Place the tiles in the film and sum the counters.
+    fn assemble(&self, tiles: Vec<Tile>) -> Film {
+        let (w, h) = (self.width, self.height);
+        let mut film = Film {
+            width: w,
+            height: h,
+            pixels: vec![[0.0; 3]; (w * h) as usize],
+            stats: Stats::default(),
+        };
+        for tile in tiles {
+            let (x0, y0, x1, _) = self.rect(tile.index);
+            let tw = (x1 - x0) as usize;
+            for (i, p) in tile.pixels.into_iter().enumerate() {
+                let (x, y) = (x0 as usize + i % tw, y0 as usize + i / tw);
+                film.pixels[y * w as usize + x] = p;
+            }
+            film.stats.merge(&tile.stats);
+        }
+        film
     }
 }

@@ -4,18 +4,20 @@
 //! one small crate of interface definitions, against which every object class,
 //! shader, integrator, camera and light is built as a plugin.
 //!
-//! - [`abi`]: the `#[repr(C)]` records that cross the plugin boundary: the
-//!   object-class record (the paper's create / add child / prepare /
-//!   intersect / local geometry / bounds / interior operations, plus `occluded`
-//!   and the primitive-set protocol), the ray, the hit-info stack, the local
-//!   geometry with its request mask, the trace context, and the root modules
-//!   of each plugin kind. They derive `StableAbi`, so the host's load check
-//!   names the first field whose layout differs.
-//! - [`sdk`]: the safe side for plugin authors: a trait per kind, one export
-//!   macro, no `unsafe` in plugin crates, every entry under `catch_unwind`.
-//! - [`geom`]: the robust geometric routines (RTG ch. 7 sphere, conservative
-//!   slab test, error-bound ray offsets), generic over f32 and f64 so the f64
-//!   reference and the stress tests share one implementation.
+//! - [`abi`]: the `#[repr(C)]` records that cross the plugin boundary. Every
+//!   entry is an `unsafe extern "C" fn`; the records derive `StableAbi`, so the
+//!   host's load check names the first field whose layout differs.
+//! - [`sdk`]: the plugin side: a safe trait per kind, capabilities as traits,
+//!   one export macro. Plugin crates contain no `unsafe` and cannot reach a
+//!   raw record.
+//! - [`host`]: the host side: owned handles with safe methods, and the
+//!   services trait the scene record is built from.
+//! - [`geom`]: the robust geometric routines (watertight triangle, RTG ch. 7
+//!   sphere, conservative slab test, error-bound ray offsets), generic over
+//!   f32 and f64 so the f64 reference and the stress tests share one
+//!   implementation.
+//! - [`xform`]: affine transforms composed in f64 and checked.
+//! - [`classes`]: the class names the shell itself must name.
 //!
 //! Aggregates are objects like any other: an aggregate reaches its children
 //! only through their records, so any acceleration structure nests inside any
@@ -24,16 +26,23 @@
 #![deny(clippy::missing_safety_doc)]
 
 pub mod abi;
+pub mod classes;
 pub mod geom;
+pub mod host;
 pub mod sdk;
 mod values;
 pub mod xform;
 
-pub use abi::*;
+pub use abi::values::{
+    geom_mask, lobe, ray_kind, Bounds3, BsdfSample, CameraSample, Color, Float3, Hit, HitEntry,
+    InstanceData, LightSample, LocalGeom, Ray, HIT_STACK_DEPTH, NONE_ID,
+};
+pub use abi::{RngState, Stats, TraceCtx};
 pub use glam;
+pub use sdk::params::{self, parse_params};
 pub use sdk::{
-    check_finite, parse_params, Camera, Child, Env, Integrator, Light, Object, PluginError,
-    Prepare, PrimSet, Scene, Shader,
+    Camera, Child, Env, FromTransform, Integrator, Light, Material, Object, Plugin, PluginError,
+    Prepare, PrimSet, PrimitiveSet, Scene, Shade, Shader,
 };
 pub use serde;
 

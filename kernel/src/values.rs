@@ -239,7 +239,7 @@ impl Hit {
 }
 
 impl LocalGeom {
-    /// Nothing filled, no shader, not an emitter.
+    /// Nothing filled, no shader.
     pub const EMPTY: LocalGeom = LocalGeom {
         p: Float3::new(0.0, 0.0, 0.0),
         p_err: Float3::new(0.0, 0.0, 0.0),
@@ -249,7 +249,6 @@ impl LocalGeom {
         dpdv: Float3::new(0.0, 1.0, 0.0),
         uv: [0.0, 0.0],
         shader: NONE_ID,
-        emitter: NONE_ID,
         filled: 0,
     };
 }
@@ -262,93 +261,39 @@ impl Default for LocalGeom {
 
 impl InstanceData {
     /// No bindings.
-    pub const NONE: InstanceData = InstanceData {
-        shader: NONE_ID,
-        emitter: NONE_ID,
-        flags: 0,
-        reserved: 0,
-    };
+    pub const NONE: InstanceData = InstanceData { shader: NONE_ID };
 }
 
-impl Stats {
-    /// Add another thread's counters.
-    pub fn merge(&mut self, o: &Stats) {
-        for (a, b) in self.rays.iter_mut().zip(o.rays) {
-            *a += b;
-        }
-        self.local_geom_calls += o.local_geom_calls;
-        for (a, b) in self.local_geom_fields.iter_mut().zip(o.local_geom_fields) {
-            *a += b;
-        }
-        self.node_tests += o.node_tests;
-        self.prim_tests += o.prim_tests;
-        self.shader_calls += o.shader_calls;
-        self.light_samples += o.light_samples;
-        self.nonfinite_samples += o.nonfinite_samples;
-        for (a, b) in self.reserved.iter_mut().zip(o.reserved) {
-            *a += b;
+impl Affine3x4 {
+    /// From glam's f64 affine (object to parent).
+    pub fn from_daffine(m: &glam::DAffine3) -> Self {
+        let (c, t) = (m.matrix3, m.translation);
+        Affine3x4 {
+            rows: [
+                [c.x_axis.x, c.y_axis.x, c.z_axis.x, t.x],
+                [c.x_axis.y, c.y_axis.y, c.z_axis.y, t.y],
+                [c.x_axis.z, c.y_axis.z, c.z_axis.z, t.z],
+            ],
         }
     }
-}
 
-impl RngState {
-    /// A stream for (seed, pixel, sample): hashed so that neighbouring pixels
-    /// and samples are uncorrelated, and independent of thread scheduling.
-    pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Self {
-        let s = splitmix(seed ^ splitmix(pixel ^ splitmix(sample)));
-        let inc = splitmix(s ^ 0x9E37_79B9_7F4A_7C15) | 1;
-        let mut r = RngState { state: 0, inc };
-        r.next_u32();
-        r.state = r.state.wrapping_add(s);
-        r.next_u32();
-        r
+    /// As glam's f64 affine.
+    pub fn to_daffine(&self) -> glam::DAffine3 {
+        let r = &self.rows;
+        glam::DAffine3::from_mat3_translation(
+            glam::DMat3::from_cols(
+                glam::DVec3::new(r[0][0], r[1][0], r[2][0]),
+                glam::DVec3::new(r[0][1], r[1][1], r[2][1]),
+                glam::DVec3::new(r[0][2], r[1][2], r[2][2]),
+            ),
+            glam::DVec3::new(r[0][3], r[1][3], r[2][3]),
+        )
     }
-    /// Next 32 random bits (PCG32 XSH-RR).
-    #[inline]
-    pub fn next_u32(&mut self) -> u32 {
-        let old = self.state;
-        self.state = old
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(self.inc);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rot = (old >> 59) as u32;
-        xorshifted.rotate_right(rot)
-    }
-    /// Uniform in [0, 1).
-    #[inline]
-    pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
-    }
-}
-
-fn splitmix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn rng_is_uniform_and_deterministic() {
-        let mut a = RngState::for_sample(1, 2, 3);
-        let mut b = RngState::for_sample(1, 2, 3);
-        let mut sum = 0.0f64;
-        for _ in 0..10_000 {
-            let x = a.next_f32();
-            assert_eq!(x, b.next_f32());
-            assert!((0.0..1.0).contains(&x));
-            sum += x as f64;
-        }
-        assert!((sum / 10_000.0 - 0.5).abs() < 0.01);
-        assert_ne!(
-            RngState::for_sample(1, 2, 3).next_u32(),
-            RngState::for_sample(1, 2, 4).next_u32()
-        );
-    }
 
     #[test]
     fn ray_accepts_is_open_and_nan_false() {
@@ -357,6 +302,18 @@ mod tests {
         assert!(r.accepts(1e-30));
         assert!(!r.accepts(f32::INFINITY));
         assert!(!r.accepts(f32::NAN));
+    }
+
+    #[test]
+    fn affine_rows_round_trip() {
+        let m = glam::DAffine3::from_scale_rotation_translation(
+            glam::DVec3::new(1.0, 2.0, 3.0),
+            glam::DQuat::from_rotation_y(0.3),
+            glam::DVec3::new(4.0, 5.0, 6.0),
+        );
+        let a = Affine3x4::from_daffine(&m);
+        assert_eq!(a.rows[0][3], 4.0);
+        assert_eq!(a.to_daffine(), m);
     }
 
     #[test]

@@ -4,29 +4,33 @@
 //! create, instance and close steps, loading only the plugin libraries the
 //! objects reachable from the root need.
 //!
-//! - [`desc`]: the scene file read, overridden (`--set`) and checked with
-//!   errors that name file, line, column, object and key;
+//! - [`file`]: the scene file read and overridden (`--set`);
+//! - [`desc`]: the description checked, with errors that name the origin,
+//!   object and key;
 //! - [`plugins`]: the plugin path and the loader, which refuses a library
 //!   built against another kernel, built with `panic = "abort"`, or that is no
 //!   rtk plugin at all, before any of its code runs;
 //! - [`build`]: creation of the DAG and the [`World`] the renderer uses.
 //!
-//! The shell never links a plugin: it knows object classes only through the
-//! kernel's records.
+//! The shell never links a plugin and holds no raw pointer: it knows object
+//! classes only through the kernel's host-side handles
+//! ([`rtk_kernel::host`]).
 #![deny(missing_docs)]
-// A scene error carries its location and notes (~200 bytes); it is built
-// once, on the way out, never on a hot path, so it is not boxed.
+// A scene error carries its origin and notes (~200 bytes); it is built once,
+// on the way out, never on a hot path, so it is not boxed.
 #![allow(clippy::result_large_err)]
 
 pub mod build;
 pub mod desc;
 pub mod error;
+pub mod file;
 pub mod plugins;
 pub mod tree;
 
-pub use build::{build, Created, Parallel, Sequential, Timings, World};
-pub use desc::{Desc, SceneFile};
+pub use build::{build, Parallel, Sequential, Timings, World};
+pub use desc::Desc;
 pub use error::{ErrorKind, SceneError};
+pub use file::SceneFile;
 pub use plugins::{PluginPath, Registry};
 
 /// Read a scene file, apply `--set` overrides, check it, and build it.

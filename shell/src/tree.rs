@@ -14,6 +14,8 @@ pub enum Origin {
     File(Range<usize>),
     /// A `--set key=value` on the command line.
     CommandLine(String),
+    /// The file as a whole (it could not be read, say).
+    Whole,
 }
 
 /// A value with its origin.

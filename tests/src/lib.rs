@@ -123,32 +123,61 @@ pub fn fixtures_dir() -> &'static Path {
     })
 }
 
+/// An edit of one kernel source file: (file under `kernel/`, from, to).
+type KernelEdit = (&'static str, &'static str, &'static str);
+
 /// A plugin built against a kernel whose `Ray` record differs (its
 /// `generation` field is `u64`): a copy of `kernel/` edited at test time.
 pub fn other_abi_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| other_kernel_plugin("otherabi", "0.1.0", true))
+    DIR.get_or_init(|| {
+        other_kernel_plugin(
+            "otherabi",
+            "0.1.0",
+            Some((
+                "src/abi/values.rs",
+                "pub generation: u32,",
+                "pub generation: u64,",
+            )),
+        )
+    })
+}
+
+/// A plugin whose header says ABI 1 (the records before ABI 2).
+pub fn abi_v1_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        other_kernel_plugin(
+            "abiv1",
+            "0.1.0",
+            Some((
+                "src/abi/mod.rs",
+                "pub const ABI_VERSION: u32 = 2;",
+                "pub const ABI_VERSION: u32 = 1;",
+            )),
+        )
+    })
 }
 
 /// A plugin built against another kernel version (0.2.0), records unchanged.
 pub fn other_version_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| other_kernel_plugin("otherversion", "0.2.0", false))
+    DIR.get_or_init(|| other_kernel_plugin("otherversion", "0.2.0", None))
 }
 
 /// Build the panicky fixture as class `class` against a copy of `kernel/`
-/// with version `version`, its `Ray` record edited if `edit_ray`.
-fn other_kernel_plugin(class: &str, version: &str, edit_ray: bool) -> PathBuf {
+/// with version `version` and one source edit.
+fn other_kernel_plugin(class: &str, version: &str, edit: Option<KernelEdit>) -> PathBuf {
     let (target, profile) = target_and_profile();
     let src = target.join("fixture-src").join(class);
     let _ = std::fs::remove_dir_all(&src);
     copy_dir(&root().join("kernel"), &src.join("kernel"));
-    if edit_ray {
-        let abi = src.join("kernel/src/abi.rs");
-        let text = std::fs::read_to_string(&abi).expect("abi.rs");
-        let edited = text.replacen("pub generation: u32,", "pub generation: u64,", 1);
-        assert_ne!(text, edited, "the edit must change the Ray record");
-        std::fs::write(&abi, edited).expect("write abi.rs");
+    if let Some((file, from, to)) = edit {
+        let path = src.join("kernel").join(file);
+        let text = std::fs::read_to_string(&path).expect("kernel source");
+        let edited = text.replacen(from, to, 1);
+        assert_ne!(text, edited, "the edit must change {file}");
+        std::fs::write(&path, edited).expect("write kernel source");
     }
     // The copy inherits nothing from the main workspace.
     let toml = std::fs::read_to_string(src.join("kernel/Cargo.toml")).expect("kernel toml");
@@ -171,6 +200,7 @@ fn other_kernel_plugin(class: &str, version: &str, edit_ray: bool) -> PathBuf {
             "serde_path_to_error = \"0.1\"",
         )
         .replace("glam.workspace = true", "glam = \"0.30\"")
+        .replace("thiserror.workspace = true", "thiserror = \"2\"")
         .replace("[lints]\nworkspace = true\n", "");
     std::fs::write(src.join("kernel/Cargo.toml"), toml).expect("kernel toml");
     let plug = src.join(class);

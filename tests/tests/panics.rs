@@ -1,4 +1,5 @@
-//! A plugin that panics gives an error naming it, a non-zero exit and no output.
+//! A plugin that panics or fails, anywhere, gives an error naming it, a
+//! non-zero exit and no output file: nothing is swallowed into a default.
 
 use rtk_tests::*;
 
@@ -10,53 +11,92 @@ fn run(where_: &str) -> Run {
     );
     let (run, img) = render_scene(&scene, &["--plugin-path", folder.path().to_str().unwrap()]);
     assert!(img.is_none());
+    assert!(!run.ok);
     run
+}
+
+fn says(r: &Run, needle: &str) {
+    assert!(
+        r.stderr.contains(needle),
+        "missing {needle:?} in:\n{}",
+        r.stderr
+    );
 }
 
 #[test]
 fn panic_in_create() {
     let r = run("create");
-    assert!(!r.ok);
-    assert!(
-        r.stderr
-            .contains("plugin 'panicky' panicked in create: deliberate panic in create"),
-        "{}",
-        r.stderr
+    says(
+        &r,
+        "plugin `panicky` panicked in create: deliberate panic in create",
     );
-    assert!(r.stderr.contains("objects.x"), "{}", r.stderr);
+    says(&r, "objects.x");
 }
 
 #[test]
 fn panic_in_prepare() {
-    let r = run("prepare");
-    assert!(!r.ok);
-    assert!(
-        r.stderr.contains("plugin 'panicky' panicked in prepare"),
-        "{}",
-        r.stderr
-    );
-}
-
-#[test]
-fn panic_in_intersect() {
-    let r = run("intersect");
-    assert!(!r.ok);
-    assert!(
-        r.stderr
-            .contains("plugin `panicky` panicked in intersect: deliberate panic in intersect"),
-        "{}",
-        r.stderr
+    says(
+        &run("prepare"),
+        "plugin `panicky` panicked in prepare: deliberate panic in prepare",
     );
 }
 
 #[test]
 fn panic_in_a_parallel_for_task() {
-    let r = run("parallel_task");
-    assert!(!r.ok);
-    assert!(
-        r.stderr
-            .contains("plugin 'panicky' panicked in prepare: a parallel_for task panicked"),
-        "{}",
-        r.stderr
+    says(
+        &run("parallel_task"),
+        "plugin `panicky` panicked in prepare: a parallel_for task panicked: deliberate panic in task 777",
+    );
+}
+
+#[test]
+fn panic_in_bounds() {
+    let r = run("bounds");
+    says(
+        &r,
+        "plugin `panicky` panicked in bounds: deliberate panic in bounds",
+    );
+    says(&r, "render");
+}
+
+#[test]
+fn panic_in_intersect() {
+    says(
+        &run("intersect"),
+        "plugin `panicky` panicked in intersect: deliberate panic in intersect",
+    );
+}
+
+#[test]
+fn panic_in_local_geom() {
+    says(
+        &run("local_geom"),
+        "plugin `panicky` panicked in local_geom: deliberate panic in local_geom",
+    );
+}
+
+#[test]
+fn a_failure_recorded_without_a_panic_names_the_plugin() {
+    says(
+        &run("fail"),
+        "plugin `panicky` deliberate failure in intersect",
+    );
+}
+
+/// A panic in a shadow ray's any-hit query, reached through a light and a
+/// Lambert shader: the failure crosses two more plugins and still stops the render.
+#[test]
+fn panic_in_occluded_under_whitted() {
+    let folder = plugin_folder(fixtures_dir(), &["panicky"]);
+    let scene = "[render]\nwidth = 8\nheight = 8\nroot = \"w\"\n[cameras.c]\nclass = \"pinhole\"\n\
+                 [lights.l]\nclass = \"point\"\nposition = [0.0, 0.0, 10.0]\n\
+                 [shaders.s]\nclass = \"lambert\"\n\
+                 [objects.x]\nclass = \"panicky\"\npanic_in = \"occluded\"\n\
+                 [objects.w]\nclass = \"list\"\nchildren = [{ object = \"x\", shader = \"s\" }]\n";
+    let (r, img) = render_scene(scene, &["--plugin-path", folder.path().to_str().unwrap()]);
+    assert!(!r.ok && img.is_none());
+    says(
+        &r,
+        "plugin `panicky` panicked in occluded: deliberate panic in occluded",
     );
 }

@@ -53,13 +53,28 @@ fn a_plugin_built_against_another_kernel_version_is_refused() {
     let e = &run.stderr;
     assert!(
         e.contains("plugin 'otherversion'")
-            && e.contains("was built against rtk-kernel 0.2.0 (ABI 1)"),
+            && e.contains("was built against rtk-kernel 0.2.0 (ABI 2)"),
         "{e}"
     );
     assert!(
         e.contains(
-            "this rtk uses rtk-kernel 0.1.0 (ABI 1). Rebuild the plugin against rtk-kernel 0.1.0."
+            "this rtk uses rtk-kernel 0.1.0 (ABI 2). Rebuild the plugin against rtk-kernel 0.1.0."
         ),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_plugin_built_against_abi_1_is_refused_with_its_version_and_the_fix() {
+    let run = run_with(abi_v1_dir(), "abiv1");
+    assert!(!run.ok);
+    let e = &run.stderr;
+    assert!(
+        e.contains("plugin 'abiv1'") && e.contains("was built against rtk-kernel 0.1.0 (ABI 1)"),
+        "{e}"
+    );
+    assert!(
+        e.contains("(ABI 2). Rebuild the plugin against rtk-kernel 0.1.0."),
         "{e}"
     );
 }

@@ -1,6 +1,6 @@
-//! Shading helpers shared by Whitted-style shaders: direct light with shadow
-//! rays through `occluded` (never a nearest-hit query), mirror reflection,
-//! refraction and the dielectric Fresnel term.
+//! Shading helpers shared by integrators and shaders: direct light with
+//! shadow rays through `occluded` (never a nearest-hit query), mirror
+//! reflection, refraction, the dielectric Fresnel term, and the cosine lobe.
 
 use super::Scene;
 use crate::abi::*;
@@ -96,12 +96,18 @@ pub fn cosine_sample(g: &LocalGeom, wo: Vec3, u: [f32; 2]) -> Option<(Vec3, f32)
     (pdf > 0.0).then_some((wi, pdf))
 }
 
+/// Are `wo` and `wi` on the same side of the shading normal (a reflection)?
+#[inline]
+pub fn same_side(g: &LocalGeom, wo: Vec3, wi: Vec3) -> bool {
+    let n = g.ns.v();
+    n.dot(wo) * n.dot(wi) > 0.0
+}
+
 /// Density of [`cosine_sample`] choosing `wi` (0 on the other side).
 #[inline]
 pub fn cosine_pdf(g: &LocalGeom, wo: Vec3, wi: Vec3) -> f32 {
-    let n = g.ns.v();
-    if n.dot(wo) * n.dot(wi) > 0.0 {
-        n.dot(wi).abs() * std::f32::consts::FRAC_1_PI
+    if same_side(g, wo, wi) {
+        g.ns.v().dot(wi).abs() * std::f32::consts::FRAC_1_PI
     } else {
         0.0
     }

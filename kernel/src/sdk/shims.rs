@@ -1,18 +1,21 @@
-//! The generic `extern "C"` shims between the ABI records and the safe traits.
-//! All the SDK's `unsafe` is here: turning the raw pointers the host passes
-//! back into references, under the ABI's contract that they are valid for the
-//! call (and, for `this`, for the object's lifetime).
+//! The generic `unsafe extern "C"` shims between the records and the safe
+//! traits: the SDK's side of each entry's signature (the record holds the
+//! other). All of the plugin side's `unsafe` is here: turning the pointers the
+//! host passes back into references, under the records' contract that they
+//! are valid for the call (and, for `this`, for the object's life).
 
 use super::*;
+use crate::abi::*;
 use abi_stable::library::{
     __call_root_module_loader, CheckTypeLayout, LibHeader, RootModule, RootModuleResult,
 };
 use abi_stable::prefix_type::PrefixTypeTrait;
 use abi_stable::std_types::RStr;
 use std::any::Any;
+use std::ffi::c_void;
 use std::marker::PhantomData;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 
 /// What the export macro knows about a plugin: its class name, documentation
 /// and crate version.
@@ -45,6 +48,11 @@ pub const fn lib_header<S: ModuleSource>() -> LibHeader {
     unsafe { LibHeader::from_constructor::<S::Module>(erased_module::<S>, CheckTypeLayout::Yes) }
 }
 
+/// Turn a module value into the `'static` prefix reference the loader returns.
+pub fn leak<M: PrefixTypeTrait>(m: M) -> M::PrefixRef {
+    m.leak_into_prefix()
+}
+
 fn meta<D: Decl>() -> ModuleMeta {
     ModuleMeta {
         class_name: RStr::from_str(D::CLASS),
@@ -59,229 +67,221 @@ fn panic_message(p: &(dyn Any + Send)) -> String {
     } else if let Some(s) = p.downcast_ref::<String>() {
         s.clone()
     } else {
-        "panic with a non-string payload".to_string()
+        "a panic with a non-string payload".to_string()
     }
 }
 
-fn report(sink: &ErrSink, key: &str, msg: &str) {
-    (sink.report)(sink.ctx, key.as_ptr(), key.len(), msg.as_ptr(), msg.len());
+fn report(sink: ErrSink, status: i32, key: &str, msg: &str) {
+    // SAFETY: the host passes a sink valid for the call; the ranges are `&str`s.
+    unsafe {
+        (sink.report)(
+            sink.ctx,
+            status,
+            key.as_ptr(),
+            key.len(),
+            msg.as_ptr(),
+            msg.len(),
+        )
+    }
 }
 
-/// Run a cold-path call: errors and panics go to the sink as a status.
-fn cold<D: Decl>(sink: &ErrSink, what: &str, f: impl FnOnce() -> Result<(), PluginError>) -> i32 {
+/// Run a cold call: an error or a panic goes to the sink, with a status.
+fn cold(sink: ErrSink, f: impl FnOnce() -> Result<(), PluginError>) -> i32 {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(())) => STATUS_OK,
         Ok(Err(e)) => {
-            report(sink, &e.key, &e.message);
+            report(sink, STATUS_ERROR, &e.key, &e.message);
             STATUS_ERROR
         }
         Err(p) => {
-            let msg = format!(
-                "plugin '{}' panicked in {what}: {}",
-                D::CLASS,
-                panic_message(&*p)
-            );
-            report(sink, "", &msg);
+            report(sink, STATUS_PANIC, "", &panic_message(&*p));
             STATUS_PANIC
         }
     }
 }
 
-/// Run a hot-path call: a panic marks the render failed and yields `fallback`.
-#[inline]
-fn hot<D: Decl, R>(ctx: *mut TraceCtx, what: &str, fallback: R, f: impl FnOnce() -> R) -> R {
-    match catch_unwind(AssertUnwindSafe(f)) {
-        Ok(r) => r,
+/// Run a hot call: a panic is recorded in the context with the plugin's name
+/// (and `fallback` returned); a failure the plugin recorded itself with
+/// [`TraceCtx::fail`] gets the plugin's name.
+///
+/// # Safety
+/// `ctx` must be valid and exclusive for the call.
+#[inline(always)]
+unsafe fn hot<D: Decl, R>(
+    ctx: *mut TraceCtx,
+    entry: &str,
+    fallback: R,
+    f: impl FnOnce(&mut TraceCtx) -> R,
+) -> R {
+    // SAFETY: guaranteed by the caller.
+    let ctx = unsafe { &mut *ctx };
+    let r = {
+        let c = &mut *ctx;
+        catch_unwind(AssertUnwindSafe(move || f(c)))
+    };
+    match r {
+        Ok(v) => {
+            ctx.claim_failure(D::CLASS);
+            v
+        }
         Err(p) => {
-            let msg = format!("panicked in {what}: {}", panic_message(&*p));
-            // SAFETY: the host passes a valid, exclusive context for the call.
-            let ctx = unsafe { &mut *ctx };
-            ctx.failed = 1;
-            (ctx.failure.report)(
-                ctx.failure.ctx,
-                D::CLASS.as_ptr(),
-                D::CLASS.len(),
-                msg.as_ptr(),
-                msg.len(),
-            );
+            let msg = format!("panicked in {entry}: {}", panic_message(&*p));
+            ctx.record_failure(D::CLASS, &msg);
             fallback
         }
     }
 }
 
-/// Decode the JSON parameters and the environment of a `create` call.
-///
 /// # Safety
-/// `params` must point at `len` bytes and `env` at a valid [`CreateEnv`]
-/// whose strings are valid for the call.
-unsafe fn create_args<'a>(
-    params: *const u8,
-    len: usize,
-    env: *const CreateEnv,
-) -> (&'a str, Env<'a>) {
-    // SAFETY: guaranteed by the caller (the host's loader).
-    let (bytes, env) = unsafe { (std::slice::from_raw_parts(params, len), &*env) };
-    // SAFETY: as above; the strings come from Rust `&str`s in the host.
-    let (dir, name) = unsafe {
-        (
-            std::slice::from_raw_parts(env.scene_dir, env.scene_dir_len),
-            std::slice::from_raw_parts(env.name, env.name_len),
-        )
-    };
-    (
-        std::str::from_utf8(bytes).unwrap_or(""),
-        Env {
-            scene_dir: std::str::from_utf8(dir).unwrap_or("."),
-            name: std::str::from_utf8(name).unwrap_or(""),
-            image_width: env.image_width,
-            image_height: env.image_height,
-        },
-    )
+/// `this` must be a live object of type `T` made by this plugin.
+#[inline(always)]
+unsafe fn obj<'a, T>(this: *const c_void) -> &'a T {
+    // SAFETY: guaranteed by the caller.
+    unsafe { &*(this as *const T) }
 }
 
-/// The shared body of every kind's `create`.
-fn create_with<D: Decl, T>(
+/// The one `create` of every kind.
+unsafe extern "C" fn create<T: Plugin>(
     params: *const u8,
     len: usize,
     env: *const CreateEnv,
     sink: ErrSink,
-    make: impl FnOnce(&str, &Env) -> Result<T, PluginError>,
 ) -> *mut c_void {
     let mut out: *mut c_void = std::ptr::null_mut();
-    cold::<D>(&sink, "create", || {
-        // SAFETY: the host passes valid parameter text and environment.
-        let (json, env) = unsafe { create_args(params, len, env) };
-        let obj = make(json, &env)?;
+    cold(sink, || {
+        // SAFETY: the host passes `len` bytes of parameter text and a valid environment.
+        let (bytes, env) = unsafe { (std::slice::from_raw_parts(params, len), env_of(&*env)) };
+        let json = std::str::from_utf8(bytes)
+            .map_err(|_| PluginError::msg("the parameters are not UTF-8 text"))?;
+        let obj = T::create(parse_params(json)?, &env)?;
         out = Box::into_raw(Box::new(obj)) as *mut c_void;
         Ok(())
     });
     out
 }
 
-extern "C" fn destroy<T>(this: *mut c_void) {
+/// The safe view of a [`CreateEnv`].
+///
+/// # Safety
+/// The environment's strings must be valid for `'a`.
+unsafe fn env_of<'a>(env: &'a CreateEnv) -> Env<'a> {
+    // SAFETY: guaranteed by the caller; the host builds them from `&str`s.
+    let (dir, name) = unsafe {
+        (
+            std::slice::from_raw_parts(env.scene_dir, env.scene_dir_len),
+            std::slice::from_raw_parts(env.name, env.name_len),
+        )
+    };
+    Env {
+        scene_dir: std::str::from_utf8(dir).unwrap_or("."),
+        name: std::str::from_utf8(name).unwrap_or(""),
+        image_width: env.image_width,
+        image_height: env.image_height,
+    }
+}
+
+unsafe extern "C" fn destroy<T>(this: *mut c_void) {
     if !this.is_null() {
-        // SAFETY: `this` came from `Box::into_raw` in `create` and is destroyed once.
+        // A panic in a destructor is dropped: there is nothing left to report it to.
         let _ = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: `this` came from `Box::into_raw` in `create` and is destroyed once.
             drop(unsafe { Box::from_raw(this as *mut T) })
         }));
     }
 }
 
-/// # Safety
-/// `this` must be a live object of type `T` made by this plugin's `create`.
-#[inline]
-unsafe fn obj<'a, T>(this: *const c_void) -> &'a T {
-    // SAFETY: guaranteed by the caller.
-    unsafe { &*(this as *const T) }
-}
-
 // ---------------------------------------------------------------- objects
 
-/// Marker tying an [`Object`] type to its declaration.
-pub struct ObjectSource<T, D>(PhantomData<(T, D)>);
-
-impl<T: Object, D: Decl> ModuleSource for ObjectSource<T, D> {
-    type Module = ObjectModuleRef;
-    fn module() -> ObjectModuleRef {
-        object_module::<T, D>()
-    }
-}
-
-/// The root module of an object class.
-pub fn object_module<T: Object, D: Decl>() -> ObjectModuleRef {
+/// The root module of an object class, before capabilities are installed.
+pub fn object_module<T: Object, D: Decl>() -> ObjectModule {
     ObjectModule {
         meta: meta::<D>(),
-        create: obj_create::<T, D>,
+        create: create::<T>,
         destroy: destroy::<T>,
-        add_child: obj_add_child::<T, D>,
-        prepare: obj_prepare::<T, D>,
-        fns: object_fns::<T, D>(),
-    }
-    .leak_into_prefix()
-}
-
-fn object_fns<T: Object, D: Decl>() -> ObjectFns {
-    ObjectFns {
+        add_child: obj_add_child::<T>,
+        prepare: obj_prepare::<T>,
+        bounds: obj_bounds::<T>,
         intersect: obj_intersect::<T, D>,
         occluded: obj_occluded::<T, D>,
         local_geom: obj_local_geom::<T, D>,
-        bounds: obj_bounds::<T>,
-        bounding_sphere: T::HAS_BOUNDING_SPHERE.then_some(obj_bounding_sphere::<T> as _),
-        hull_points: None,
-        slab_bounds: None,
-        in_interior: T::HAS_INTERIOR.then_some(obj_in_interior::<T, D> as _),
-        sample_surface: T::HAS_SURFACE_SAMPLING.then_some(obj_sample_surface::<T, D> as _),
-        area: T::HAS_SURFACE_SAMPLING.then_some(obj_area::<T> as _),
-        prim_count: T::HAS_PRIM_SET.then_some(obj_prim_count::<T> as _),
-        prim_bounds: T::HAS_PRIM_SET.then_some(obj_prim_bounds::<T> as _),
-        intersect_prims: T::HAS_PRIM_SET.then_some(obj_intersect_prims::<T, D> as _),
-        occluded_prims: T::HAS_PRIM_SET.then_some(obj_occluded_prims::<T, D> as _),
-        reorder_prims: None,
+        from_transform: None,
+        prim_count: None,
+        prim_bounds: None,
+        intersect_prims: None,
+        occluded_prims: None,
     }
 }
 
-extern "C" fn obj_create<T: Object, D: Decl>(
-    params: *const u8,
-    len: usize,
-    env: *const CreateEnv,
-    sink: ErrSink,
-) -> *mut c_void {
-    create_with::<D, T>(params, len, env, sink, |json, env| {
-        T::create(parse_params(json)?, env)
-    })
-}
-
-extern "C" fn obj_add_child<T: Object, D: Decl>(
+unsafe extern "C" fn obj_add_child<T: Object>(
     this: *mut c_void,
     child: ObjectRef,
     inst: *const InstanceData,
     sink: ErrSink,
 ) -> i32 {
-    cold::<D>(&sink, "add_child", || {
-        // SAFETY: the host passes the live object, exclusively, and valid instance data.
-        let (me, inst) = unsafe { (&mut *(this as *mut T), *inst) };
-        me.add_child(Child::new(child, inst))
+    cold(sink, || {
+        // SAFETY: the host passes the live object, exclusively, a prepared
+        // child that outlives it, and valid instance data.
+        let (me, child) = unsafe { (&mut *(this as *mut T), Child::new(child, *inst)) };
+        me.add_child(child)
     })
 }
 
-extern "C" fn obj_prepare<T: Object, D: Decl>(
+unsafe extern "C" fn obj_prepare<T: Object>(
     this: *mut c_void,
     env: *const PrepareEnv,
     sink: ErrSink,
 ) -> i32 {
-    cold::<D>(&sink, "prepare", || {
+    cold(sink, || {
         // SAFETY: the host passes the live object, exclusively, and a valid environment.
         let (me, env) = unsafe { (&mut *(this as *mut T), &*env) };
         me.prepare(&Prepare { env })
     })
 }
 
-extern "C" fn obj_intersect<T: Object, D: Decl>(
+unsafe extern "C" fn obj_bounds<T: Object>(
+    this: *const c_void,
+    t0: f32,
+    t1: f32,
+    out: *mut Bounds3,
+    sink: ErrSink,
+) -> i32 {
+    cold(sink, || {
+        // SAFETY: the host passes the live object and a valid output record.
+        unsafe { *out = obj::<T>(this).bounds(t0, t1) };
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn obj_intersect<T: Object, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
     ray: *const Ray,
     hit: *mut Hit,
     level: u32,
 ) -> bool {
-    hot::<D, _>(ctx, "intersect", false, || {
-        // SAFETY: the caller passes the live object and valid, exclusive query records.
-        unsafe { obj::<T>(this).intersect(&mut *ctx, &*ray, &mut *hit, level) }
-    })
+    // SAFETY: the caller passes the live object and valid, exclusive records.
+    unsafe {
+        hot::<D, _>(ctx, "intersect", false, |ctx| {
+            obj::<T>(this).intersect(ctx, &*ray, &mut *hit, level)
+        })
+    }
 }
 
-extern "C" fn obj_occluded<T: Object, D: Decl>(
+unsafe extern "C" fn obj_occluded<T: Object, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
     ray: *const Ray,
     level: u32,
 ) -> bool {
-    hot::<D, _>(ctx, "occluded", false, || {
-        // SAFETY: the caller passes the live object and valid, exclusive query records.
-        unsafe { obj::<T>(this).occluded(&mut *ctx, &*ray, level) }
-    })
+    // SAFETY: the caller passes the live object and valid, exclusive records.
+    unsafe {
+        hot::<D, _>(ctx, "occluded", false, |ctx| {
+            obj::<T>(this).occluded(ctx, &*ray, level)
+        })
+    }
 }
 
-extern "C" fn obj_local_geom<T: Object, D: Decl>(
+unsafe extern "C" fn obj_local_geom<T: Object, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
     ray: *const Ray,
@@ -290,84 +290,82 @@ extern "C" fn obj_local_geom<T: Object, D: Decl>(
     mask: u32,
     out: *mut LocalGeom,
 ) {
-    hot::<D, _>(ctx, "local_geom", (), || {
-        // SAFETY: the caller passes the live object and valid, exclusive query records.
-        unsafe { obj::<T>(this).local_geom(&mut *ctx, &*ray, &*hit, level, mask, &mut *out) }
+    // SAFETY: the caller passes the live object and valid, exclusive records.
+    unsafe {
+        hot::<D, _>(ctx, "local_geom", (), |ctx| {
+            obj::<T>(this).local_geom(ctx, &*ray, &*hit, level, mask, &mut *out)
+        })
+    }
+}
+
+/// Fills the optional entries of a capability a plugin names in its export
+/// macro (`capabilities = [PrimitiveSet]`): each method is named after its
+/// trait and exists only when the type implements it.
+pub struct Install<T, D>(PhantomData<(T, D)>);
+
+#[allow(non_snake_case)]
+impl<T: PrimitiveSet, D: Decl> Install<T, D> {
+    /// Offer the primitive-set protocol.
+    pub fn PrimitiveSet(m: &mut ObjectModule) {
+        m.prim_count = Some(obj_prim_count::<T>);
+        m.prim_bounds = Some(obj_prim_bounds::<T>);
+        m.intersect_prims = Some(obj_intersect_prims::<T, D>);
+        m.occluded_prims = Some(obj_occluded_prims::<T, D>);
+    }
+}
+
+#[allow(non_snake_case)]
+impl<T: FromTransform, D: Decl> Install<T, D> {
+    /// Offer creation from a composed transform.
+    pub fn FromTransform(m: &mut ObjectModule) {
+        m.from_transform = Some(obj_from_transform::<T>);
+    }
+}
+
+#[allow(non_snake_case)]
+impl<T: Shade, D: Decl> Install<T, D> {
+    /// Offer whole shading.
+    pub fn Shade(m: &mut ShaderModule) {
+        m.shade = Some(sh_shade::<T, D>);
+    }
+}
+
+unsafe extern "C" fn obj_from_transform<T: FromTransform>(
+    m: *const Affine3x4,
+    env: *const CreateEnv,
+    sink: ErrSink,
+) -> *mut c_void {
+    let mut out: *mut c_void = std::ptr::null_mut();
+    cold(sink, || {
+        // SAFETY: the host passes a valid matrix and environment.
+        let (m, env) = unsafe { (*m, env_of(&*env)) };
+        let obj = T::from_transform(m.to_daffine(), &env)?;
+        out = Box::into_raw(Box::new(obj)) as *mut c_void;
+        Ok(())
+    });
+    out
+}
+
+unsafe extern "C" fn obj_prim_count<T: PrimitiveSet>(
+    this: *const c_void,
+    out: *mut u32,
+    sink: ErrSink,
+) -> i32 {
+    cold(sink, || {
+        // SAFETY: the caller passes the live object and a valid output.
+        unsafe { *out = obj::<T>(this).prim_count() };
+        Ok(())
     })
 }
 
-extern "C" fn obj_bounds<T: Object>(this: *const c_void, t0: f32, t1: f32, out: *mut Bounds3) {
-    let r = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the caller passes the live object.
-        unsafe { obj::<T>(this) }.bounds(t0, t1)
-    }));
-    // A panic here leaves an empty box; the caller sees the object as empty.
-    // SAFETY: the caller passes a valid output record.
-    unsafe { *out = r.unwrap_or(Bounds3::EMPTY) };
-}
-
-extern "C" fn obj_bounding_sphere<T: Object>(
-    this: *const c_void,
-    t0: f32,
-    t1: f32,
-    out: *mut BoundingSphere,
-) -> bool {
-    catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the caller passes the live object and a valid output record.
-        unsafe { *out = obj::<T>(this).bounding_sphere(t0, t1) };
-    }))
-    .is_ok()
-}
-
-extern "C" fn obj_in_interior<T: Object, D: Decl>(
-    this: *const c_void,
-    ctx: *mut TraceCtx,
-    p: *const Float3,
-    time: f32,
-) -> bool {
-    hot::<D, _>(ctx, "in_interior", false, || {
-        // SAFETY: the caller passes the live object and valid records.
-        unsafe { obj::<T>(this).in_interior(&mut *ctx, *p, time) }
-    })
-}
-
-extern "C" fn obj_sample_surface<T: Object, D: Decl>(
-    this: *const c_void,
-    ctx: *mut TraceCtx,
-    u: *const [f32; 3],
-    time: f32,
-    out: *mut SurfaceSample,
-) -> bool {
-    hot::<D, _>(ctx, "sample_surface", false, || {
-        // SAFETY: the caller passes the live object and valid records.
-        match unsafe { obj::<T>(this).sample_surface(&mut *ctx, *u, time) } {
-            Some(s) => {
-                // SAFETY: valid output record.
-                unsafe { *out = s };
-                true
-            }
-            None => false,
-        }
-    })
-}
-
-extern "C" fn obj_area<T: Object>(this: *const c_void, time: f32) -> f32 {
-    // SAFETY: the caller passes the live object.
-    catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.area(time))).unwrap_or(0.0)
-}
-
-extern "C" fn obj_prim_count<T: Object>(this: *const c_void) -> u32 {
-    // SAFETY: the caller passes the live object.
-    catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.prim_count())).unwrap_or(0)
-}
-
-extern "C" fn obj_prim_bounds<T: Object>(
+unsafe extern "C" fn obj_prim_bounds<T: PrimitiveSet>(
     this: *const c_void,
     first: u32,
     n: u32,
     out: *mut Bounds3,
-) {
-    let _ = catch_unwind(AssertUnwindSafe(|| {
+    sink: ErrSink,
+) -> i32 {
+    cold(sink, || {
         // SAFETY: the caller passes the live object and room for `n` boxes.
         let (me, out) = unsafe {
             (
@@ -375,11 +373,19 @@ extern "C" fn obj_prim_bounds<T: Object>(
                 std::slice::from_raw_parts_mut(out, n as usize),
             )
         };
-        me.prim_bounds(first, out)
-    }));
+        let total = me.prim_count() as u64;
+        if first as u64 + n as u64 > total {
+            return Err(PluginError::msg(format!(
+                "asked for the boxes of primitives {first}..{} of {total}",
+                first as u64 + n as u64
+            )));
+        }
+        me.prim_bounds(first, out);
+        Ok(())
+    })
 }
 
-extern "C" fn obj_intersect_prims<T: Object, D: Decl>(
+unsafe extern "C" fn obj_intersect_prims<T: PrimitiveSet, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
     ray: *const Ray,
@@ -388,16 +394,16 @@ extern "C" fn obj_intersect_prims<T: Object, D: Decl>(
     hit: *mut Hit,
     level: u32,
 ) -> bool {
-    hot::<D, _>(ctx, "intersect_prims", false, || {
-        // SAFETY: the caller passes the live object, `n` ids and valid, exclusive records.
-        unsafe {
+    // SAFETY: the caller passes the live object, `n` ids and valid, exclusive records.
+    unsafe {
+        hot::<D, _>(ctx, "intersect_prims", false, |ctx| {
             let ids = std::slice::from_raw_parts(ids, n as usize);
-            obj::<T>(this).intersect_prims(&mut *ctx, &*ray, ids, &mut *hit, level)
-        }
-    })
+            obj::<T>(this).intersect_prims(ctx, &*ray, ids, &mut *hit, level)
+        })
+    }
 }
 
-extern "C" fn obj_occluded_prims<T: Object, D: Decl>(
+unsafe extern "C" fn obj_occluded_prims<T: PrimitiveSet, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
     ray: *const Ray,
@@ -405,307 +411,190 @@ extern "C" fn obj_occluded_prims<T: Object, D: Decl>(
     n: u32,
     level: u32,
 ) -> bool {
-    hot::<D, _>(ctx, "occluded_prims", false, || {
-        // SAFETY: the caller passes the live object, `n` ids and valid, exclusive records.
-        unsafe {
+    // SAFETY: the caller passes the live object, `n` ids and valid, exclusive records.
+    unsafe {
+        hot::<D, _>(ctx, "occluded_prims", false, |ctx| {
             let ids = std::slice::from_raw_parts(ids, n as usize);
-            obj::<T>(this).occluded_prims(&mut *ctx, &*ray, ids, level)
-        }
-    })
+            obj::<T>(this).occluded_prims(ctx, &*ray, ids, level)
+        })
+    }
+}
+
+/// Tell the host a file was read.
+pub(super) fn note_file(env: &PrepareEnv, path: &str) {
+    // SAFETY: the host's environment is valid during `prepare`; the range is a `&str`.
+    unsafe { (env.note_file)(env.host, path.as_ptr(), path.len()) }
 }
 
 /// `Prepare::parallel_for`: hand each index to the host's pool; catch panics
-/// per task (unwinding into the host would abort) and re-raise one here.
+/// per task (unwinding into the host would abort) and re-raise the first here.
 pub(super) fn parallel_for<F: Fn(u64) + Sync>(env: &PrepareEnv, n: u64, f: F) {
     struct Job<'a, F> {
         f: &'a F,
-        panicked: AtomicBool,
+        panicked: Mutex<Option<String>>,
     }
-    extern "C" fn body<F: Fn(u64) + Sync>(user: *const c_void, i: u64) {
+    unsafe extern "C" fn body<F: Fn(u64) + Sync>(user: *const c_void, i: u64) {
         // SAFETY: `user` is the `Job` below, alive until `parallel_for` returns.
         let job = unsafe { &*(user as *const Job<F>) };
-        if catch_unwind(AssertUnwindSafe(|| (job.f)(i))).is_err() {
-            job.panicked.store(true, Ordering::Relaxed);
+        if let Err(p) = catch_unwind(AssertUnwindSafe(|| (job.f)(i))) {
+            if let Ok(mut first) = job.panicked.lock() {
+                first.get_or_insert_with(|| panic_message(&*p));
+            }
         }
     }
     let job = Job {
         f: &f,
-        panicked: AtomicBool::new(false),
+        panicked: Mutex::new(None),
     };
-    (env.parallel_for)(
-        env.host,
-        n,
-        ParallelBody { func: body::<F> },
-        &job as *const Job<F> as *const c_void,
-    );
-    if job.panicked.load(Ordering::Relaxed) {
-        panic!("a parallel_for task panicked");
+    // SAFETY: the environment is valid during `prepare`; `job` outlives the
+    // call, which returns only when every task has run.
+    unsafe {
+        (env.parallel_for)(
+            env.host,
+            n,
+            ParallelBody { func: body::<F> },
+            &job as *const Job<F> as *const c_void,
+        )
+    };
+    if let Some(msg) = job.panicked.into_inner().ok().flatten() {
+        panic!("a parallel_for task panicked: {msg}");
     }
 }
 
 // ---------------------------------------------------------------- shaders
 
-/// Marker tying a [`Shader`] type to its declaration.
-pub struct ShaderSource<T, D>(PhantomData<(T, D)>);
-
-impl<T: Shader, D: Decl> ModuleSource for ShaderSource<T, D> {
-    type Module = ShaderModuleRef;
-    fn module() -> ShaderModuleRef {
-        shader_module::<T, D>()
-    }
-}
-
-/// The root module of a shader.
-pub fn shader_module<T: Shader, D: Decl>() -> ShaderModuleRef {
+/// The root module of a shader, before capabilities are installed.
+pub fn shader_module<T: Shader, D: Decl>() -> ShaderModule {
     ShaderModule {
         meta: meta::<D>(),
-        create: sh_create::<T, D>,
+        create: create::<T>,
         destroy: destroy::<T>,
         eval: sh_eval::<T, D>,
         sample: sh_sample::<T, D>,
-        pdf: sh_pdf::<T>,
-        emitted: T::EMITS.then_some(sh_emitted::<T> as _),
-        shade: T::SHADES.then_some(sh_shade::<T, D> as _),
+        shade: None,
     }
-    .leak_into_prefix()
 }
 
-extern "C" fn sh_create<T: Shader, D: Decl>(
-    params: *const u8,
-    len: usize,
-    env: *const CreateEnv,
-    sink: ErrSink,
-) -> *mut c_void {
-    create_with::<D, T>(params, len, env, sink, |json, env| {
-        T::create(parse_params(json)?, env)
-    })
-}
-
-extern "C" fn sh_eval<T: Shader, D: Decl>(
+unsafe extern "C" fn sh_eval<T: Shader, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
     geom: *const LocalGeom,
     wo: *const Float3,
     wi: *const Float3,
 ) -> Color {
-    hot::<D, _>(ctx, "eval", Color::BLACK, || {
-        // SAFETY: the caller passes the live shader and valid records.
-        unsafe { obj::<T>(this).eval(&mut *ctx, &*geom, (*wo).v(), (*wi).v()) }
-    })
+    // SAFETY: the caller passes the live shader and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "eval", Color::BLACK, |ctx| {
+            obj::<T>(this).eval(ctx, &*geom, (*wo).v(), (*wi).v())
+        })
+    }
 }
 
-extern "C" fn sh_sample<T: Shader, D: Decl>(
+unsafe extern "C" fn sh_sample<T: Shader, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
     geom: *const LocalGeom,
     wo: *const Float3,
     u: *const [f32; 2],
+    lobes: u32,
     out: *mut BsdfSample,
 ) -> bool {
-    hot::<D, _>(ctx, "sample", false, || {
-        // SAFETY: the caller passes the live shader and valid records.
-        match unsafe { obj::<T>(this).sample(&mut *ctx, &*geom, (*wo).v(), *u) } {
-            Some(s) => {
-                // SAFETY: valid output record.
-                unsafe { *out = s };
-                true
+    // SAFETY: the caller passes the live shader and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "sample", false, |ctx| {
+            match obj::<T>(this).sample(ctx, &*geom, (*wo).v(), *u, lobes) {
+                Some(s) => {
+                    *out = s;
+                    true
+                }
+                None => false,
             }
-            None => false,
-        }
-    })
+        })
+    }
 }
 
-extern "C" fn sh_pdf<T: Shader>(
-    this: *const c_void,
-    geom: *const LocalGeom,
-    wo: *const Float3,
-    wi: *const Float3,
-) -> f32 {
-    catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the caller passes the live shader and valid records.
-        unsafe { obj::<T>(this).pdf(&*geom, (*wo).v(), (*wi).v()) }
-    }))
-    .unwrap_or(0.0)
-}
-
-extern "C" fn sh_emitted<T: Shader>(
-    this: *const c_void,
-    geom: *const LocalGeom,
-    wo: *const Float3,
-) -> Color {
-    catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the caller passes the live shader and valid records.
-        unsafe { obj::<T>(this).emitted(&*geom, (*wo).v()) }
-    }))
-    .unwrap_or(Color::BLACK)
-}
-
-extern "C" fn sh_shade<T: Shader, D: Decl>(
+unsafe extern "C" fn sh_shade<T: Shade, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
-    scene: *const SceneApi,
+    scene: *const SceneRef,
     ray: *const Ray,
     geom: *const LocalGeom,
 ) -> Color {
-    hot::<D, _>(ctx, "shade", Color::BLACK, || {
-        // SAFETY: the caller passes the live shader and valid records.
-        unsafe { obj::<T>(this).shade(&mut *ctx, &Scene::new(&*scene), &*ray, &*geom) }
-    })
+    // SAFETY: the caller passes the live shader, a live scene record and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "shade", Color::BLACK, |ctx| {
+            obj::<T>(this).shade(ctx, &Scene::new(&*scene), &*ray, &*geom)
+        })
+    }
 }
 
 // ---------------------------------------------------------------- integrators
 
-/// Marker tying an [`Integrator`] type to its declaration.
-pub struct IntegratorSource<T, D>(PhantomData<(T, D)>);
-
-impl<T: Integrator, D: Decl> ModuleSource for IntegratorSource<T, D> {
-    type Module = IntegratorModuleRef;
-    fn module() -> IntegratorModuleRef {
-        integrator_module::<T, D>()
-    }
-}
-
 /// The root module of an integrator.
-pub fn integrator_module<T: Integrator, D: Decl>() -> IntegratorModuleRef {
+pub fn integrator_module<T: Integrator, D: Decl>() -> IntegratorModule {
     IntegratorModule {
         meta: meta::<D>(),
-        create: int_create::<T, D>,
+        create: create::<T>,
         destroy: destroy::<T>,
-        max_depth: int_max_depth::<T>,
         li: int_li::<T, D>,
     }
-    .leak_into_prefix()
 }
 
-extern "C" fn int_create<T: Integrator, D: Decl>(
-    params: *const u8,
-    len: usize,
-    env: *const CreateEnv,
-    sink: ErrSink,
-) -> *mut c_void {
-    create_with::<D, T>(params, len, env, sink, |json, env| {
-        T::create(parse_params(json)?, env)
-    })
-}
-
-extern "C" fn int_max_depth<T: Integrator>(this: *const c_void) -> u32 {
-    // SAFETY: the caller passes the live integrator.
-    catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.max_depth())).unwrap_or(0)
-}
-
-extern "C" fn int_li<T: Integrator, D: Decl>(
+unsafe extern "C" fn int_li<T: Integrator, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
-    scene: *const SceneApi,
+    scene: *const SceneRef,
     ray: *const Ray,
 ) -> Color {
-    hot::<D, _>(ctx, "li", Color::BLACK, || {
-        // SAFETY: the caller passes the live integrator and valid records.
-        unsafe { obj::<T>(this).li(&mut *ctx, &Scene::new(&*scene), &*ray) }
-    })
+    // SAFETY: the caller passes the live integrator, a live scene record and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "li", Color::BLACK, |ctx| {
+            obj::<T>(this).li(ctx, &Scene::new(&*scene), &*ray)
+        })
+    }
 }
 
 // ---------------------------------------------------------------- cameras
 
-/// Marker tying a [`Camera`] type to its declaration.
-pub struct CameraSource<T, D>(PhantomData<(T, D)>);
-
-impl<T: Camera, D: Decl> ModuleSource for CameraSource<T, D> {
-    type Module = CameraModuleRef;
-    fn module() -> CameraModuleRef {
-        camera_module::<T, D>()
-    }
-}
-
 /// The root module of a camera.
-pub fn camera_module<T: Camera, D: Decl>() -> CameraModuleRef {
+pub fn camera_module<T: Camera, D: Decl>() -> CameraModule {
     CameraModule {
         meta: meta::<D>(),
-        create: cam_create::<T, D>,
+        create: create::<T>,
         destroy: destroy::<T>,
-        generate_ray: cam_generate_ray::<T>,
+        generate_ray: cam_generate_ray::<T, D>,
     }
-    .leak_into_prefix()
 }
 
-extern "C" fn cam_create<T: Camera, D: Decl>(
-    params: *const u8,
-    len: usize,
-    env: *const CreateEnv,
-    sink: ErrSink,
-) -> *mut c_void {
-    create_with::<D, T>(params, len, env, sink, |json, env| {
-        T::create(parse_params(json)?, env)
-    })
-}
-
-extern "C" fn cam_generate_ray<T: Camera>(
+unsafe extern "C" fn cam_generate_ray<T: Camera, D: Decl>(
     this: *const c_void,
+    ctx: *mut TraceCtx,
     sample: *const CameraSample,
     out: *mut Ray,
 ) -> f32 {
-    catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the caller passes the live camera and valid records.
-        let (ray, w) = unsafe { obj::<T>(this).generate_ray(&*sample) };
-        // SAFETY: valid output record.
-        unsafe { *out = ray };
-        w
-    }))
-    // A NaN weight tells the host the camera failed.
-    .unwrap_or(f32::NAN)
+    // SAFETY: the caller passes the live camera and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "generate_ray", 0.0, |_| {
+            let (ray, w) = obj::<T>(this).generate_ray(&*sample);
+            *out = ray;
+            w
+        })
+    }
 }
 
 // ---------------------------------------------------------------- lights
 
-/// Marker tying a [`Light`] type to its declaration.
-pub struct LightSource<T, D>(PhantomData<(T, D)>);
-
-impl<T: Light, D: Decl> ModuleSource for LightSource<T, D> {
-    type Module = LightModuleRef;
-    fn module() -> LightModuleRef {
-        light_module::<T, D>()
-    }
-}
-
 /// The root module of a light.
-pub fn light_module<T: Light, D: Decl>() -> LightModuleRef {
+pub fn light_module<T: Light, D: Decl>() -> LightModule {
     LightModule {
         meta: meta::<D>(),
-        create: light_create::<T, D>,
+        create: create::<T>,
         destroy: destroy::<T>,
-        flags: light_flags::<T>,
-        preprocess: Some(light_preprocess::<T>),
         sample_li: light_sample_li::<T, D>,
-        pdf_li: None,
-        le: T::HAS_LE.then_some(light_le::<T> as _),
     }
-    .leak_into_prefix()
 }
 
-extern "C" fn light_create<T: Light, D: Decl>(
-    params: *const u8,
-    len: usize,
-    env: *const CreateEnv,
-    sink: ErrSink,
-) -> *mut c_void {
-    create_with::<D, T>(params, len, env, sink, |json, env| {
-        T::create(parse_params(json)?, env)
-    })
-}
-
-extern "C" fn light_flags<T: Light>(this: *const c_void) -> u32 {
-    // SAFETY: the caller passes the live light.
-    catch_unwind(AssertUnwindSafe(|| unsafe { obj::<T>(this) }.flags())).unwrap_or(0)
-}
-
-extern "C" fn light_preprocess<T: Light>(this: *mut c_void, world: *const Bounds3) {
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the caller passes the live light, exclusively, and valid bounds.
-        unsafe { (*(this as *mut T)).preprocess(&*world) }
-    }));
-}
-
-extern "C" fn light_sample_li<T: Light, D: Decl>(
+unsafe extern "C" fn light_sample_li<T: Light, D: Decl>(
     this: *const c_void,
     ctx: *mut TraceCtx,
     p: *const Float3,
@@ -713,23 +602,16 @@ extern "C" fn light_sample_li<T: Light, D: Decl>(
     time: f32,
     out: *mut LightSample,
 ) -> bool {
-    hot::<D, _>(ctx, "sample_li", false, || {
-        // SAFETY: the caller passes the live light and valid records.
-        match unsafe { obj::<T>(this).sample_li(&mut *ctx, (*p).v(), *u, time) } {
-            Some(s) => {
-                // SAFETY: valid output record.
-                unsafe { *out = s };
-                true
+    // SAFETY: the caller passes the live light and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "sample_li", false, |ctx| {
+            match obj::<T>(this).sample_li(ctx, (*p).v(), *u, time) {
+                Some(s) => {
+                    *out = s;
+                    true
+                }
+                None => false,
             }
-            None => false,
-        }
-    })
-}
-
-extern "C" fn light_le<T: Light>(this: *const c_void, ray: *const Ray) -> Color {
-    catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: the caller passes the live light and a valid ray.
-        unsafe { obj::<T>(this).le(&*ray) }
-    }))
-    .unwrap_or(Color::BLACK)
+        })
+    }
 }

@@ -25,29 +25,18 @@ struct Directional {
     irradiance: Color,
 }
 
-impl Light for Directional {
+impl Plugin for Directional {
     type Params = Params;
 
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        check_finite("direction", &p.direction)?;
-        check_finite("irradiance", &p.irradiance)?;
-        let d = Vec3::from(p.direction);
-        if d.length_squared() == 0.0 {
-            return Err(PluginError::key("direction", "must not be zero"));
-        }
-        if p.irradiance.iter().any(|&c| c < 0.0) {
-            return Err(PluginError::key("irradiance", "must not be negative"));
-        }
         Ok(Directional {
-            to_light: -d.normalize(),
-            irradiance: Color::from_array(p.irradiance),
+            to_light: -params::direction("direction", p.direction)?,
+            irradiance: params::color("irradiance", p.irradiance)?,
         })
     }
+}
 
-    fn flags(&self) -> u32 {
-        light_flags::DELTA_DIRECTION
-    }
-
+impl Light for Directional {
     fn sample_li(
         &self,
         _ctx: &mut TraceCtx,
@@ -60,7 +49,6 @@ impl Light for Directional {
             dist: f32::INFINITY,
             li: self.irradiance,
             pdf: 1.0,
-            flags: light_flags::DELTA_DIRECTION,
         })
     }
 }

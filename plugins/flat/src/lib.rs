@@ -18,23 +18,32 @@ struct Flat {
     color: Color,
 }
 
-impl Shader for Flat {
+impl Plugin for Flat {
     type Params = Params;
 
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        check_finite("color", &p.color)?;
-        if p.color.iter().any(|&c| c < 0.0) {
-            return Err(PluginError::key("color", "components must not be negative"));
-        }
         Ok(Flat {
-            color: Color::from_array(p.color),
+            color: params::color("color", p.color)?,
         })
     }
+}
 
-    const SHADES: bool = true;
+impl Shader for Flat {
+    /// As a material, it reflects nothing.
+    fn eval(&self, _ctx: &mut TraceCtx, _g: &LocalGeom, _wo: glam::Vec3, _wi: glam::Vec3) -> Color {
+        Color::BLACK
+    }
+}
+
+impl Shade for Flat {
     fn shade(&self, _ctx: &mut TraceCtx, _scene: &Scene, _ray: &Ray, _geom: &LocalGeom) -> Color {
         self.color
     }
 }
 
-rtk_kernel::export_shader!(Flat, class = "flat", doc = include_str!("../README.md"));
+rtk_kernel::export_shader!(
+    Flat,
+    class = "flat",
+    doc = include_str!("../README.md"),
+    capabilities = [Shade]
+);

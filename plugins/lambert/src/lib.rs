@@ -1,7 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::shading::{cosine_pdf, cosine_sample, direct_light};
+use rtk_kernel::sdk::shading::{cosine_sample, same_side};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::f32::consts::FRAC_1_PI;
@@ -18,36 +18,28 @@ fn half() -> [f32; 3] {
 }
 
 struct Lambert {
+    /// albedo / π.
     f: Color,
 }
 
-impl Lambert {
-    /// The BRDF where wo and wi are on the same side of the surface.
-    fn brdf(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
-        let n = g.ns.v();
-        if n.dot(wo) * n.dot(wi) > 0.0 {
-            self.f
-        } else {
-            Color::BLACK
-        }
+impl Plugin for Lambert {
+    type Params = Params;
+
+    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+        Ok(Lambert {
+            f: params::reflectance("albedo", p.albedo)?.scale(FRAC_1_PI),
+        })
     }
 }
 
 impl Shader for Lambert {
-    type Params = Params;
-
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        check_finite("albedo", &p.albedo)?;
-        if p.albedo.iter().any(|&c| !(0.0..=1.0).contains(&c)) {
-            return Err(PluginError::key("albedo", "components must be in [0, 1]"));
-        }
-        Ok(Lambert {
-            f: Color::from_array(p.albedo).scale(FRAC_1_PI),
-        })
-    }
-
     fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
-        self.brdf(g, wo, wi)
+        // Reflection only: both directions on the same side of the surface.
+        if same_side(g, wo, wi) {
+            self.f
+        } else {
+            Color::BLACK
+        }
     }
 
     fn sample(
@@ -56,24 +48,20 @@ impl Shader for Lambert {
         g: &LocalGeom,
         wo: Vec3,
         u: [f32; 2],
+        lobes: u32,
     ) -> Option<BsdfSample> {
+        if lobes & lobe::DIFFUSE == 0 || lobes & lobe::REFLECTION == 0 {
+            return None;
+        }
         let (wi, pdf) = cosine_sample(g, wo, u)?;
+        // f·cos/pdf with pdf = cos/π: the albedo.
+        let cos = g.ns.v().dot(wi).abs();
         Some(BsdfSample {
             wi: wi.into(),
-            f: self.f,
+            weight: self.f.scale(cos / pdf),
             pdf,
-            flags: bsdf_flags::REFLECTION,
+            lobe: lobe::DIFFUSE | lobe::REFLECTION,
         })
-    }
-
-    fn pdf(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> f32 {
-        cosine_pdf(g, wo, wi)
-    }
-
-    const SHADES: bool = true;
-    fn shade(&self, ctx: &mut TraceCtx, scene: &Scene, ray: &Ray, g: &LocalGeom) -> Color {
-        let wo = -ray.dir.v().normalize();
-        direct_light(ctx, scene, ray, g, |_, wi| self.brdf(g, wo, wi))
     }
 }
 

@@ -7,28 +7,40 @@ use rtk_kernel::*;
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {}
 
+/// The paper's exhaustive list: every child tested for every ray. Slow, and
+/// the oracle every other aggregate must match hit for hit.
 struct List {
     children: Vec<Child>,
+    /// Over the whole shutter interval [0, 1]: a superset of any sub-interval's.
+    bounds: Bounds3,
 }
 
-impl Object for List {
+impl Plugin for List {
     type Params = Params;
 
     fn create(_p: Params, _env: &Env) -> Result<Self, PluginError> {
         Ok(List {
             children: Vec::new(),
+            bounds: Bounds3::EMPTY,
         })
     }
+}
 
+impl Object for List {
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         self.children.push(child);
         Ok(())
     }
 
-    fn bounds(&self, t0: f32, t1: f32) -> Bounds3 {
-        self.children
-            .iter()
-            .fold(Bounds3::EMPTY, |b, c| b.union(c.bounds(t0, t1)))
+    fn prepare(&mut self, _env: &Prepare) -> Result<(), PluginError> {
+        for c in &self.children {
+            self.bounds = self.bounds.union(c.bounds(0.0, 1.0)?);
+        }
+        Ok(())
+    }
+
+    fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
+        self.bounds
     }
 
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {

@@ -145,7 +145,7 @@ impl Mesh {
     }
 }
 
-impl Object for Mesh {
+impl Plugin for Mesh {
     type Params = Params;
 
     fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
@@ -176,7 +176,9 @@ impl Object for Mesh {
             all_ids: vec![],
         })
     }
+}
 
+impl Object for Mesh {
     fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
         let bytes = env.read_file(&self.path).map_err(|e| {
             PluginError::key("file", format!("cannot read {}: {e}", self.path.display()))
@@ -315,8 +317,9 @@ impl Object for Mesh {
             out.filled |= geom_mask::UV | geom_mask::TANGENTS;
         }
     }
+}
 
-    const HAS_PRIM_SET: bool = true;
+impl PrimitiveSet for Mesh {
     fn prim_count(&self) -> u32 {
         self.tris.len() as u32
     }
@@ -351,8 +354,6 @@ impl Object for Mesh {
         ctx.stats.prim_tests += tests;
         r
     }
-
-    const HAS_SURFACE_SAMPLING: bool = false;
 }
 
 impl Mesh {
@@ -374,4 +375,9 @@ impl Mesh {
     }
 }
 
-rtk_kernel::export_object!(Mesh, class = "mesh", doc = include_str!("../README.md"));
+rtk_kernel::export_object!(
+    Mesh,
+    class = "mesh",
+    doc = include_str!("../README.md"),
+    capabilities = [PrimitiveSet]
+);

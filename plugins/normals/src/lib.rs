@@ -9,21 +9,19 @@ struct Params {}
 
 struct Normals;
 
-impl Integrator for Normals {
+impl Plugin for Normals {
     type Params = Params;
 
     fn create(_p: Params, _env: &Env) -> Result<Self, PluginError> {
         Ok(Normals)
     }
+}
 
-    fn max_depth(&self) -> u32 {
-        0
-    }
-
+impl Integrator for Normals {
     fn li(&self, ctx: &mut TraceCtx, scene: &Scene, ray: &Ray) -> Color {
         let mut hit = Hit::new();
         if !scene.intersect(ctx, ray, ray_kind::TRACED, &mut hit) {
-            return scene.background(ray);
+            return scene.background(ctx, ray);
         }
         let g = scene.local_geom(ctx, ray, &hit, geom_mask::SHADING_NORMAL);
         let n = g.ns.v();

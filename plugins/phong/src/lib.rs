@@ -1,10 +1,7 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::geom::spawn_ray;
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::shading::{
-    cosine_pdf, cosine_sample, direct_light, fresnel_dielectric, reflect, refract,
-};
+use rtk_kernel::sdk::shading::{cosine_sample, fresnel_dielectric, reflect, refract, same_side};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -48,10 +45,10 @@ struct Phong {
 impl Phong {
     /// Diffuse plus normalised Phong lobe, for wo and wi on the same side.
     fn brdf(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
-        let n = g.ns.v();
-        if n.dot(wo) * n.dot(wi) <= 0.0 {
+        if !same_side(g, wo, wi) {
             return Color::BLACK;
         }
+        let n = g.ns.v();
         let n = if n.dot(wo) < 0.0 { -n } else { n };
         let mut f = self.kd.scale(FRAC_1_PI);
         if !self.ks.is_black() {
@@ -65,15 +62,7 @@ impl Phong {
     }
 }
 
-fn color(key: &str, c: [f32; 3]) -> Result<Color, PluginError> {
-    check_finite(key, &c)?;
-    if c.iter().any(|&v| v < 0.0) {
-        return Err(PluginError::key(key, "components must not be negative"));
-    }
-    Ok(Color::from_array(c))
-}
-
-impl Shader for Phong {
+impl Plugin for Phong {
     type Params = Params;
 
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
@@ -84,78 +73,95 @@ impl Shader for Phong {
             return Err(PluginError::key("ior", "must be a positive number"));
         }
         Ok(Phong {
-            kd: color("diffuse", p.diffuse)?,
-            ks: color("specular", p.specular)?,
+            kd: params::color("diffuse", p.diffuse)?,
+            ks: params::color("specular", p.specular)?,
             n: p.shininess,
-            kr: color("mirror", p.mirror)?,
-            kt: color("transmission", p.transmission)?,
+            kr: params::color("mirror", p.mirror)?,
+            kt: params::color("transmission", p.transmission)?,
             ior: p.ior,
         })
     }
+}
 
+/// The delta lobes at a hit: the mirror direction with its weight
+/// `kr + kt·F`, and the refracted direction with `kt·(1 − F)` (none on total
+/// internal reflection), F being the dielectric Fresnel reflectance.
+struct DeltaLobes {
+    reflect: (Vec3, Color),
+    refract: Option<(Vec3, Color)>,
+}
+
+impl Phong {
+    fn delta_lobes(&self, g: &LocalGeom, wo: Vec3) -> DeltaLobes {
+        // Work on the side the ray arrives from.
+        let entering = g.ng.v().dot(wo) > 0.0;
+        let n = if g.ns.v().dot(wo) > 0.0 {
+            g.ns.v()
+        } else {
+            -g.ns.v()
+        };
+        let mut lobes = DeltaLobes {
+            reflect: (reflect(wo, n), self.kr),
+            refract: None,
+        };
+        if !self.kt.is_black() {
+            let eta = if entering { self.ior } else { 1.0 / self.ior };
+            let f = fresnel_dielectric(wo.dot(n), eta);
+            lobes.reflect.1 = lobes.reflect.1.plus(self.kt.scale(f));
+            lobes.refract = refract(wo, n, eta).map(|t| (t, self.kt.scale(1.0 - f)));
+        }
+        lobes
+    }
+}
+
+fn delta(wi: Vec3, weight: Color, side: u32) -> Option<BsdfSample> {
+    (!weight.is_black()).then(|| BsdfSample {
+        wi: wi.into(),
+        weight,
+        pdf: 1.0,
+        lobe: lobe::SPECULAR | side,
+    })
+}
+
+impl Shader for Phong {
     fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
         self.brdf(g, wo, wi)
     }
 
+    /// Specular requests get a delta lobe: transmission when `lobes` allows
+    /// it, else reflection; otherwise the diffuse and glossy terms are
+    /// sampled together by their cosine lobe.
     fn sample(
         &self,
         _ctx: &mut TraceCtx,
         g: &LocalGeom,
         wo: Vec3,
         u: [f32; 2],
+        lobes: u32,
     ) -> Option<BsdfSample> {
+        if lobes & lobe::SPECULAR != 0 && !(self.kr.is_black() && self.kt.is_black()) {
+            let d = self.delta_lobes(g, wo);
+            if lobes & lobe::TRANSMISSION != 0 {
+                if let Some((t, w)) = d.refract {
+                    return delta(t, w, lobe::TRANSMISSION);
+                }
+            }
+            if lobes & lobe::REFLECTION != 0 {
+                return delta(d.reflect.0, d.reflect.1, lobe::REFLECTION);
+            }
+            return None;
+        }
+        if lobes & (lobe::DIFFUSE | lobe::GLOSSY) == 0 || lobes & lobe::REFLECTION == 0 {
+            return None;
+        }
         let (wi, pdf) = cosine_sample(g, wo, u)?;
+        let cos = g.ns.v().dot(wi).abs();
         Some(BsdfSample {
             wi: wi.into(),
-            f: self.brdf(g, wo, wi),
+            weight: self.brdf(g, wo, wi).scale(cos / pdf),
             pdf,
-            flags: bsdf_flags::REFLECTION,
+            lobe: lobe::DIFFUSE | lobe::GLOSSY | lobe::REFLECTION,
         })
-    }
-
-    fn pdf(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> f32 {
-        cosine_pdf(g, wo, wi)
-    }
-
-    const SHADES: bool = true;
-    fn shade(&self, ctx: &mut TraceCtx, scene: &Scene, ray: &Ray, g: &LocalGeom) -> Color {
-        let wo = -ray.dir.v().normalize();
-        let mut l = if self.kd.is_black() && self.ks.is_black() {
-            Color::BLACK
-        } else {
-            direct_light(ctx, scene, ray, g, |_, wi| self.brdf(g, wo, wi))
-        };
-        if self.kr.is_black() && self.kt.is_black() {
-            return l;
-        }
-        // Work on the side the ray arrives from.
-        let ng = g.ng.v();
-        let entering = ng.dot(wo) > 0.0;
-        let n = if g.ns.v().dot(wo) > 0.0 {
-            g.ns.v()
-        } else {
-            -g.ns.v()
-        };
-        let r_dir = reflect(wo, n);
-        let mut reflect_weight = self.kr;
-        if !self.kt.is_black() {
-            let eta = if entering { self.ior } else { 1.0 / self.ior };
-            let f = fresnel_dielectric(wo.dot(n), eta);
-            reflect_weight = reflect_weight.plus(self.kt.scale(f));
-            if let Some(t_dir) = refract(wo, n, eta) {
-                let t = spawn_ray(g, t_dir, ray);
-                l = l.plus(self.kt.scale(1.0 - f).times(scene.trace(
-                    ctx,
-                    &t,
-                    ray_kind::REFRACTION,
-                )));
-            }
-        }
-        if !reflect_weight.is_black() {
-            let r = spawn_ray(g, r_dir, ray);
-            l = l.plus(reflect_weight.times(scene.trace(ctx, &r, ray_kind::REFLECTION)));
-        }
-        l
     }
 }
 

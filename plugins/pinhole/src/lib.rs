@@ -34,25 +34,24 @@ struct Pinhole {
     up: Vec3,
 }
 
-impl Camera for Pinhole {
+impl Plugin for Pinhole {
     type Params = Params;
 
     fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
-        check_finite("eye", &p.eye)?;
-        check_finite("look_at", &p.look_at)?;
-        check_finite("up", &p.up)?;
+        let eye = params::point("eye", p.eye)?;
+        let look_at = params::point("look_at", p.look_at)?;
+        let up = params::point("up", p.up)?;
         if !(p.fov_y > 0.0 && p.fov_y < 180.0) {
             return Err(PluginError::key(
                 "fov_y",
                 format!("must be between 0 and 180 degrees, got {}", p.fov_y),
             ));
         }
-        let eye = Vec3::from(p.eye);
-        let forward = (Vec3::from(p.look_at) - eye).normalize_or_zero();
+        let forward = (look_at - eye).normalize_or_zero();
         if forward == Vec3::ZERO {
             return Err(PluginError::key("look_at", "must differ from eye"));
         }
-        let right = forward.cross(Vec3::from(p.up)).normalize_or_zero();
+        let right = forward.cross(up).normalize_or_zero();
         if right == Vec3::ZERO {
             return Err(PluginError::key(
                 "up",
@@ -69,7 +68,9 @@ impl Camera for Pinhole {
             up: up * tan_half,
         })
     }
+}
 
+impl Camera for Pinhole {
     fn generate_ray(&self, s: &CameraSample) -> (Ray, f32) {
         let sx = 2.0 * s.film[0] - 1.0;
         let sy = 1.0 - 2.0 * s.film[1];

@@ -22,25 +22,18 @@ struct Point {
     intensity: Color,
 }
 
-impl Light for Point {
+impl Plugin for Point {
     type Params = Params;
 
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        check_finite("position", &p.position)?;
-        check_finite("intensity", &p.intensity)?;
-        if p.intensity.iter().any(|&c| c < 0.0) {
-            return Err(PluginError::key("intensity", "must not be negative"));
-        }
         Ok(Point {
-            pos: p.position.into(),
-            intensity: Color::from_array(p.intensity),
+            pos: params::point("position", p.position)?,
+            intensity: params::color("intensity", p.intensity)?,
         })
     }
+}
 
-    fn flags(&self) -> u32 {
-        light_flags::DELTA_POSITION
-    }
-
+impl Light for Point {
     fn sample_li(
         &self,
         _ctx: &mut TraceCtx,
@@ -59,7 +52,6 @@ impl Light for Point {
             dist,
             li: self.intensity.scale(1.0 / d2),
             pdf: 1.0,
-            flags: light_flags::DELTA_POSITION,
         })
     }
 }

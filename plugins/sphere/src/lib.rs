@@ -36,11 +36,11 @@ impl Sphere {
     }
 }
 
-impl Object for Sphere {
+impl Plugin for Sphere {
     type Params = Params;
 
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        check_finite("center", &p.center)?;
+        let center = params::point("center", p.center)?;
         if !p.radius.is_finite() || p.radius <= 0.0 {
             return Err(PluginError::key(
                 "radius",
@@ -57,11 +57,13 @@ impl Object for Sphere {
             ));
         }
         Ok(Sphere {
-            c: Vec3::from(p.center),
+            c: center,
             r: p.radius,
         })
     }
+}
 
+impl Object for Sphere {
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
         Bounds3::new(self.c - Vec3::splat(self.r), self.c + Vec3::splat(self.r))
     }
@@ -121,43 +123,6 @@ impl Object for Sphere {
             out.dpdv = dpdv.into();
             out.filled |= geom_mask::UV | geom_mask::TANGENTS;
         }
-    }
-
-    const HAS_BOUNDING_SPHERE: bool = true;
-    fn bounding_sphere(&self, _t0: f32, _t1: f32) -> BoundingSphere {
-        BoundingSphere {
-            center: self.c.into(),
-            radius: self.r,
-        }
-    }
-
-    const HAS_INTERIOR: bool = true;
-    fn in_interior(&self, _ctx: &mut TraceCtx, p: Float3, _time: f32) -> bool {
-        (p.v() - self.c).length_squared() < self.r * self.r
-    }
-
-    const HAS_SURFACE_SAMPLING: bool = true;
-    fn sample_surface(
-        &self,
-        _ctx: &mut TraceCtx,
-        u: [f32; 3],
-        _time: f32,
-    ) -> Option<SurfaceSample> {
-        let z = 1.0 - 2.0 * u[0];
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = std::f32::consts::TAU * u[1];
-        let n = Vec3::new(r * phi.cos(), r * phi.sin(), z);
-        let p = self.c + n * self.r;
-        let err = rtk_kernel::geom::gamma::<f32>(5) * (p.abs() + self.c.abs());
-        Some(SurfaceSample {
-            p: p.into(),
-            p_err: err.into(),
-            n: n.into(),
-            pdf_area: 1.0 / self.area(0.0),
-        })
-    }
-    fn area(&self, _time: f32) -> f32 {
-        4.0 * std::f32::consts::PI * self.r * self.r
     }
 }
 

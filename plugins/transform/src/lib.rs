@@ -24,16 +24,18 @@ struct Transform {
     abs_m: Mat3,
     flips: bool,
     child: Option<Child>,
+    /// The child's box over the shutter interval, in its own space.
+    child_bounds: Bounds3,
 }
 
 fn to_f32(m: &DAffine3) -> Affine3A {
     Affine3A::from_mat3_translation(m.matrix3.as_mat3(), m.translation.as_vec3())
 }
 
-impl Object for Transform {
+impl Plugin for Transform {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
         let m = match (p.matrix, p.steps) {
             (Some(m), None) => {
                 let a = xform::matrix_from_rows("matrix", &m)?;
@@ -43,6 +45,13 @@ impl Object for Transform {
             (None, Some(s)) => xform::compose("steps", &s)?,
             _ => return Err(PluginError::msg("give exactly one of `matrix` and `steps`")),
         };
+        Self::from_transform(m, env)
+    }
+}
+
+impl FromTransform for Transform {
+    /// The shell's instance transforms: composed and checked already.
+    fn from_transform(m: DAffine3, _env: &Env) -> Result<Self, PluginError> {
         let inv = m.inverse();
         let normal = inv.matrix3.transpose();
         let abs = m.matrix3.as_mat3();
@@ -53,9 +62,12 @@ impl Object for Transform {
             abs_m: Mat3::from_cols(abs.x_axis.abs(), abs.y_axis.abs(), abs.z_axis.abs()),
             flips: m.matrix3.determinant() < 0.0,
             child: None,
+            child_bounds: Bounds3::EMPTY,
         })
     }
+}
 
+impl Object for Transform {
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         if self.child.is_some() {
             return Err(PluginError::key(
@@ -68,17 +80,15 @@ impl Object for Transform {
     }
 
     fn prepare(&mut self, _env: &Prepare) -> Result<(), PluginError> {
-        if self.child.is_none() {
+        let Some(c) = &self.child else {
             return Err(PluginError::key("children", "a transform needs one child"));
-        }
+        };
+        self.child_bounds = c.bounds(0.0, 1.0)?;
         Ok(())
     }
 
-    fn bounds(&self, t0: f32, t1: f32) -> Bounds3 {
-        let Some(c) = &self.child else {
-            return Bounds3::EMPTY;
-        };
-        let b = c.bounds(t0, t1);
+    fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
+        let b = self.child_bounds;
         if b.is_empty() {
             return b;
         }
@@ -159,5 +169,6 @@ impl Transform {
 rtk_kernel::export_object!(
     Transform,
     class = "transform",
-    doc = include_str!("../README.md")
+    doc = include_str!("../README.md"),
+    capabilities = [FromTransform]
 );

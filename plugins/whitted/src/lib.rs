@@ -1,5 +1,8 @@
 #![doc = include_str!("../README.md")]
 
+use rtk_kernel::geom::spawn_ray;
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::sdk::shading::direct_light;
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 
@@ -14,6 +17,10 @@ fn depth() -> u32 {
     32
 }
 
+/// Deepest `max_depth` accepted: each bounce is a few plugin frames deep on
+/// the render thread's stack.
+const MAX_DEPTH_LIMIT: u32 = 1024;
+
 struct Whitted {
     max_depth: u32,
 }
@@ -21,33 +28,54 @@ struct Whitted {
 /// What Whitted shading reads: position (spawning rays), both normals.
 const MASK: u32 = geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL;
 
-impl Integrator for Whitted {
+/// The delta lobes Whitted follows, in the order their rays are traced.
+const SPECULAR_LOBES: [(u32, u32); 2] = [
+    (lobe::SPECULAR | lobe::TRANSMISSION, ray_kind::REFRACTION),
+    (lobe::SPECULAR | lobe::REFLECTION, ray_kind::REFLECTION),
+];
+
+impl Plugin for Whitted {
     type Params = Params;
 
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        if p.max_depth > 1024 {
+        if p.max_depth > MAX_DEPTH_LIMIT {
             return Err(PluginError::key("max_depth", "must be at most 1024"));
         }
         Ok(Whitted {
             max_depth: p.max_depth,
         })
     }
+}
 
-    fn max_depth(&self) -> u32 {
-        self.max_depth
-    }
-
+impl Integrator for Whitted {
     fn li(&self, ctx: &mut TraceCtx, scene: &Scene, ray: &Ray) -> Color {
         if ray.generation > self.max_depth {
             return Color::BLACK;
         }
         let mut hit = Hit::new();
         if !scene.intersect(ctx, ray, ray_kind::TRACED, &mut hit) {
-            return scene.background(ray);
+            return scene.background(ctx, ray);
         }
         let g = scene.local_geom(ctx, ray, &hit, MASK);
-        let wo = -ray.dir.v().normalize();
-        scene.emitted(&g, wo).plus(scene.shade(ctx, ray, &g))
+        let Some(m) = scene.material(&g) else {
+            // No shader bound: a grey headlight, so an unshaded scene is visible.
+            let facing = g.ns.v().dot(-ray.dir.v().normalize_or_zero()).abs();
+            return Color::splat(0.8 * facing);
+        };
+        if let Some(c) = m.shade(ctx, scene, ray, &g) {
+            return c;
+        }
+        // Direct light through the material's BRDF, one shadow ray a light...
+        let wo: Vec3 = -ray.dir.v().normalize();
+        let mut l = direct_light(ctx, scene, ray, &g, |ctx, wi| m.eval(ctx, &g, wo, wi));
+        // ...plus the mirror and refraction rays of its delta lobes.
+        for (lobes, kind) in SPECULAR_LOBES {
+            if let Some(s) = m.sample(ctx, &g, wo, [0.5, 0.5], lobes) {
+                let r = spawn_ray(&g, s.wi.v(), ray);
+                l = l.plus(s.weight.times(scene.trace(ctx, &r, kind)));
+            }
+        }
+        l
     }
 }
 

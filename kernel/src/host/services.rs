@@ -1,0 +1,306 @@
+//! What the host offers plugins, as safe traits the host implements; generic
+//! shims turn them into the records ([`PrepareEnv`], [`SceneRef`]).
+
+use super::handles::Shader;
+use crate::abi::*;
+use crate::sdk::Decl;
+use glam::Vec3;
+use std::ffi::c_void;
+use std::marker::PhantomData;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// The host's thread pool and file accounting, as `prepare` sees them.
+pub trait PrepareServices: Sync {
+    /// Number of threads queries may come from (`TraceCtx::thread_index` bound).
+    fn max_threads(&self) -> u32;
+    /// Run `f(i)` for every `i < n`, returning when all are done.
+    fn parallel_for(&self, n: u64, f: &(dyn Fn(u64) + Sync));
+    /// A plugin read this file (for `--stats`).
+    fn note_file(&self, path: &str);
+}
+
+/// Call `f` with a [`PrepareEnv`] built over `services`, valid for the call.
+pub(super) fn prepare_env<R>(
+    services: &dyn PrepareServices,
+    f: impl FnOnce(&PrepareEnv) -> R,
+) -> R {
+    let host: &dyn PrepareServices = services;
+    let env = PrepareEnv {
+        max_threads: services.max_threads(),
+        host: &host as *const &dyn PrepareServices as *const c_void,
+        parallel_for: prepare_parallel_for,
+        note_file: prepare_note_file,
+    };
+    f(&env)
+}
+
+/// A task context pointer the pool's threads share.
+struct SharedPtr(*const c_void);
+// SAFETY: it points at the SDK's job record, which is `Sync` (a `&F` with
+// `F: Sync` and a mutex), alive until `parallel_for` returns.
+unsafe impl Sync for SharedPtr {}
+
+unsafe extern "C" fn prepare_parallel_for(
+    host: *const c_void,
+    n: u64,
+    body: ParallelBody,
+    user: *const c_void,
+) {
+    // SAFETY: `host` is the `&dyn PrepareServices` of `prepare_env`, alive for `prepare`.
+    let h = unsafe { *(host as *const &dyn PrepareServices) };
+    let user = SharedPtr(user);
+    let user = &user;
+    // The task bodies catch their own panics (the SDK's job record); a panic
+    // of the host's pool itself must not unwind into the plugin.
+    let _ = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: the SDK's task body with its job record, valid for the call.
+        h.parallel_for(n, &|i| unsafe { (body.func)(user.0, i) })
+    }));
+}
+
+unsafe extern "C" fn prepare_note_file(host: *const c_void, path: *const u8, len: usize) {
+    // SAFETY: `host` as above; the plugin passes a valid byte range.
+    let (h, bytes) = unsafe {
+        (
+            *(host as *const &dyn PrepareServices),
+            std::slice::from_raw_parts(path, len),
+        )
+    };
+    let _ = catch_unwind(AssertUnwindSafe(|| {
+        h.note_file(&String::from_utf8_lossy(bytes))
+    }));
+}
+
+/// What the host offers integrators and shaders while rendering: the
+/// kernel's `Trace`, the root's queries, the lights and the bound materials.
+/// Every method may be called from many threads at once.
+pub trait Services: Sync + Sized {
+    /// `Trace(ray) -> color`: the integrator's radiance along `ray`.
+    fn trace(&self, ctx: &mut TraceCtx, ray: &Ray, kind: u32) -> Color;
+    /// Nearest hit of the root.
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, kind: u32, hit: &mut Hit) -> bool;
+    /// Any hit of the root.
+    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray) -> bool;
+    /// Local geometry of a root hit.
+    fn local_geom(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &Hit, mask: u32) -> LocalGeom;
+    /// Radiance of a ray leaving the scene.
+    fn background(&self, ctx: &mut TraceCtx, ray: &Ray) -> Color;
+    /// Number of lights.
+    fn light_count(&self) -> u32;
+    /// Sample light `index` from `p`.
+    fn sample_light(
+        &self,
+        ctx: &mut TraceCtx,
+        index: u32,
+        p: Vec3,
+        u: [f32; 2],
+        time: f32,
+    ) -> Option<LightSample>;
+    /// The shader with id `shader`.
+    fn material(&self, shader: u32) -> Option<&Shader>;
+}
+
+/// The scene-services record for host type `H`, built once per render.
+pub struct ServicesTable<H> {
+    r: SceneServicesRef,
+    _host: PhantomData<fn(&H)>,
+}
+
+impl<H> Clone for ServicesTable<H> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<H> Copy for ServicesTable<H> {}
+
+impl<H: Services> ServicesTable<H> {
+    /// Build the record (a few hundred bytes, leaked: records are `'static`).
+    #[allow(clippy::new_without_default)]
+    pub fn new() -> Self {
+        use abi_stable::prefix_type::PrefixTypeTrait;
+        let r = SceneServices {
+            trace: svc_trace::<H>,
+            intersect: svc_intersect::<H>,
+            occluded: svc_occluded::<H>,
+            local_geom: svc_local_geom::<H>,
+            background: svc_background::<H>,
+            light_count: svc_light_count::<H>,
+            sample_light: svc_sample_light::<H>,
+            material: svc_material::<H>,
+        }
+        .leak_into_prefix();
+        ServicesTable {
+            r,
+            _host: PhantomData,
+        }
+    }
+
+    /// The record bound to `host`, valid while `host` is borrowed.
+    pub fn bind<'h>(&self, host: &'h H) -> SceneRecord<'h> {
+        SceneRecord {
+            r: SceneRef {
+                host: host as *const H as *const c_void,
+                services: self.r,
+            },
+            _host: PhantomData,
+        }
+    }
+}
+
+/// The scene services bound to a live host: what an integrator receives.
+pub struct SceneRecord<'h> {
+    r: SceneRef,
+    _host: PhantomData<&'h ()>,
+}
+
+impl SceneRecord<'_> {
+    pub(crate) fn raw(&self) -> &SceneRef {
+        &self.r
+    }
+}
+
+/// The host, for failure records of its own (a bug: the host never panics by design).
+struct HostDecl;
+impl Decl for HostDecl {
+    const CLASS: &'static str = "rtk (host)";
+    const DOC: &'static str = "";
+    const VERSION: &'static str = env!("CARGO_PKG_VERSION");
+}
+
+/// Call host code from a plugin's frame: a panic must not unwind into it.
+///
+/// # Safety
+/// `host` must be the live `H` the record was bound to and `ctx` valid and
+/// exclusive for the call.
+#[inline(always)]
+unsafe fn guard<H, R>(
+    host: *const c_void,
+    ctx: *mut TraceCtx,
+    entry: &str,
+    fallback: R,
+    f: impl FnOnce(&H, &mut TraceCtx) -> R,
+) -> R {
+    // SAFETY: guaranteed by the caller.
+    let (h, ctx) = unsafe { (&*(host as *const H), &mut *ctx) };
+    let r = {
+        let c = &mut *ctx;
+        catch_unwind(AssertUnwindSafe(move || f(h, c)))
+    };
+    r.unwrap_or_else(|_| {
+        ctx.record_failure(HostDecl::CLASS, &format!("panicked in {entry}"));
+        fallback
+    })
+}
+
+unsafe extern "C" fn svc_trace<H: Services>(
+    host: *const c_void,
+    ctx: *mut TraceCtx,
+    ray: *const Ray,
+    kind: u32,
+) -> Color {
+    // SAFETY: the record's contract: live host, valid exclusive context and ray.
+    unsafe {
+        guard::<H, _>(host, ctx, "trace", Color::BLACK, |h, c| {
+            h.trace(c, &*ray, kind)
+        })
+    }
+}
+
+unsafe extern "C" fn svc_intersect<H: Services>(
+    host: *const c_void,
+    ctx: *mut TraceCtx,
+    ray: *const Ray,
+    kind: u32,
+    hit: *mut Hit,
+) -> bool {
+    // SAFETY: as above.
+    unsafe {
+        guard::<H, _>(host, ctx, "intersect", false, |h, c| {
+            h.intersect(c, &*ray, kind, &mut *hit)
+        })
+    }
+}
+
+unsafe extern "C" fn svc_occluded<H: Services>(
+    host: *const c_void,
+    ctx: *mut TraceCtx,
+    ray: *const Ray,
+) -> bool {
+    // SAFETY: as above.
+    unsafe { guard::<H, _>(host, ctx, "occluded", false, |h, c| h.occluded(c, &*ray)) }
+}
+
+unsafe extern "C" fn svc_local_geom<H: Services>(
+    host: *const c_void,
+    ctx: *mut TraceCtx,
+    ray: *const Ray,
+    hit: *const Hit,
+    mask: u32,
+    out: *mut LocalGeom,
+) {
+    // SAFETY: as above; `out` is a valid output record.
+    unsafe {
+        guard::<H, _>(host, ctx, "local_geom", (), |h, c| {
+            *out = h.local_geom(c, &*ray, &*hit, mask)
+        })
+    }
+}
+
+unsafe extern "C" fn svc_background<H: Services>(
+    host: *const c_void,
+    ctx: *mut TraceCtx,
+    ray: *const Ray,
+) -> Color {
+    // SAFETY: as above.
+    unsafe {
+        guard::<H, _>(host, ctx, "background", Color::BLACK, |h, c| {
+            h.background(c, &*ray)
+        })
+    }
+}
+
+unsafe extern "C" fn svc_light_count<H: Services>(host: *const c_void) -> u32 {
+    // SAFETY: as above.
+    let h = unsafe { &*(host as *const H) };
+    catch_unwind(AssertUnwindSafe(|| h.light_count())).unwrap_or(0)
+}
+
+unsafe extern "C" fn svc_sample_light<H: Services>(
+    host: *const c_void,
+    ctx: *mut TraceCtx,
+    index: u32,
+    p: *const Float3,
+    u: *const [f32; 2],
+    time: f32,
+    out: *mut LightSample,
+) -> bool {
+    // SAFETY: as above; `out` is a valid output record.
+    unsafe {
+        guard::<H, _>(host, ctx, "sample_light", false, |h, c| {
+            match h.sample_light(c, index, (*p).v(), *u, time) {
+                Some(s) => {
+                    *out = s;
+                    true
+                }
+                None => false,
+            }
+        })
+    }
+}
+
+unsafe extern "C" fn svc_material<H: Services>(
+    host: *const c_void,
+    shader: u32,
+    out: *mut ShaderRef,
+) -> bool {
+    // SAFETY: as above; `out` is a valid output record.
+    let h = unsafe { &*(host as *const H) };
+    match catch_unwind(AssertUnwindSafe(|| h.material(shader).map(Shader::raw))) {
+        Ok(Some(r)) => {
+            // SAFETY: as above.
+            unsafe { *out = r };
+            true
+        }
+        _ => false,
+    }
+}

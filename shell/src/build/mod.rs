@@ -1,0 +1,178 @@
+//! Building the object DAG, loading only the plugins what is reachable from
+//! the root needs. Errors come before any expensive step:
+//! 1. [`reach`]: walk the instances from the root (cycles and depth checked),
+//!    collecting the definitions and shaders reachable;
+//! 2. [`needs`]: load exactly the classes they name (plus the camera, the
+//!    integrator, the lights, and the instance-transform class if a reachable
+//!    instance has a transform);
+//! 3. create the camera, integrator and lights;
+//! 4. [`objects`]: create each reachable object definition once, bottom-up.
+
+mod needs;
+mod objects;
+mod prepare;
+mod reach;
+
+pub use prepare::{Parallel, Sequential};
+
+use crate::desc::{Def, Desc};
+use crate::error::{ErrorKind, SceneError};
+use crate::file::SceneFile;
+use crate::plugins::{Module, Plugin, Registry};
+use objects::{call_error, Builder};
+use prepare::PrepareHost;
+use rtk_kernel::host::{Camera, Integrator, Light, Object, Shader};
+use rtk_kernel::{Bounds3, InstanceData};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// How long each step of building took.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Timings {
+    /// Loading and checking plugin libraries.
+    pub load_plugins: Duration,
+    /// `create` and `add_child` calls.
+    pub create: Duration,
+    /// `prepare` calls.
+    pub prepare: Duration,
+}
+
+/// A built, prepared scene: everything the renderer needs. Objects are
+/// immutable from here on; dropping the world destroys them, parents first.
+pub struct World {
+    /// The description it was built from.
+    pub desc: Desc,
+    /// The root object.
+    pub root: Object,
+    /// The root instance's bindings.
+    pub root_inst: InstanceData,
+    /// World bounds over the shutter interval.
+    pub bounds: Bounds3,
+    /// The camera.
+    pub camera: Camera,
+    /// The integrator.
+    pub integrator: Integrator,
+    /// The lights.
+    pub lights: Vec<Light>,
+    /// The shaders, indexed by shader id.
+    pub shaders: Vec<Shader>,
+    /// The plugins loaded for this scene.
+    pub plugins: Vec<Arc<Plugin>>,
+    /// Files plugins reported reading during `prepare`.
+    pub files_read: Vec<String>,
+    /// Timings of the build steps.
+    pub timings: Timings,
+    /// Objects created (instance transforms included).
+    pub objects_created: usize,
+}
+
+/// Build a scene: load the plugins it needs, create and prepare its objects.
+pub fn build(
+    file: &SceneFile,
+    desc: Desc,
+    registry: &mut Registry,
+    parallel: &dyn Parallel,
+) -> Result<World, SceneError> {
+    build_world(file, desc, registry, parallel).map_err(|e| e.in_file(&file.text))
+}
+
+fn build_world(
+    file: &SceneFile,
+    desc: Desc,
+    registry: &mut Registry,
+    parallel: &dyn Parallel,
+) -> Result<World, SceneError> {
+    let reach = reach::Reach::walk(&desc)?;
+    let t0 = Instant::now();
+    let plugins = needs::load(&desc, &reach, registry)?;
+    let load_plugins = t0.elapsed();
+
+    let host = PrepareHost {
+        par: parallel,
+        files: Mutex::new(Vec::new()),
+    };
+    let mut b = Builder::new(
+        &desc,
+        registry,
+        file.dir().to_string_lossy().into_owned(),
+        host,
+    );
+    let t1 = Instant::now();
+    let camera = create_def(&b, &desc.cameras[&desc.render.camera], |m, p, a| match m {
+        Module::Camera(c) => Some(Camera::create(c, p, a)),
+        _ => None,
+    })?;
+    let integrator = create_def(&b, &desc.render.integrator, |m, p, a| match m {
+        Module::Integrator(c) => Some(Integrator::create(c, p, a)),
+        _ => None,
+    })?;
+    let lights = desc
+        .lights
+        .values()
+        .map(|l| {
+            create_def(&b, l, |m, p, a| match m {
+                Module::Light(c) => Some(Light::create(c, p, a)),
+                _ => None,
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    b.create_time += t1.elapsed();
+
+    let root_inst = &desc.render.root;
+    let root = b.instance(root_inst)?;
+    let root_bind = b.bindings(root_inst)?;
+    let bounds = root.bounds(0.0, 1.0).map_err(|e| {
+        SceneError::new(
+            ErrorKind::PluginCall,
+            &root_inst.origin,
+            "render",
+            "root",
+            format!("plugin `{}` {e}", root.class_name()),
+        )
+    })?;
+    let files_read = b
+        .prepare_host
+        .files
+        .lock()
+        .map(|f| f.clone())
+        .unwrap_or_default();
+    let timings = Timings {
+        load_plugins,
+        create: b.create_time,
+        prepare: b.prepare_time,
+    };
+    let (shaders, objects_created) = (std::mem::take(&mut b.shaders), b.objects_created);
+    drop(b);
+    Ok(World {
+        desc,
+        root,
+        root_inst: root_bind,
+        bounds,
+        camera,
+        integrator,
+        lights,
+        shaders,
+        plugins,
+        files_read,
+        timings,
+        objects_created,
+    })
+}
+
+/// Create a camera, integrator or light from its definition; `make` picks
+/// the module of the right kind (the kind was checked when loading).
+fn create_def<T>(
+    b: &Builder,
+    def: &Def,
+    make: impl FnOnce(
+        Module,
+        &str,
+        &rtk_kernel::host::CreateArgs,
+    ) -> Option<Result<T, rtk_kernel::host::CallError>>,
+) -> Result<T, SceneError> {
+    let path = def.path();
+    match make(b.module(&def.class), &def.params, &b.args(&path)) {
+        Some(r) => r.map_err(|e| call_error(def, None, "its parameters", e)),
+        None => unreachable!("kinds were checked when loading"),
+    }
+}

@@ -1,0 +1,120 @@
+//! Loading exactly the plugins the reachable scene names, each checked to be
+//! of the kind its use needs.
+
+use super::reach::Reach;
+use crate::desc::Desc;
+use crate::error::{ErrorKind, SceneError};
+use crate::plugins::{library_file_name, ClassError, Plugin, Registry};
+use crate::tree::Origin;
+use rtk_kernel::abi::PluginKind;
+use std::sync::Arc;
+
+/// One class the scene needs, and where it asks for it.
+struct Need {
+    class: String,
+    kind: PluginKind,
+    origin: Origin,
+    /// The definition (or instance) path naming it.
+    object: String,
+}
+
+/// The classes needed: the camera, the integrator, every light, and the
+/// shaders and objects reachable from the root (plus the instance-transform
+/// class when a reachable instance has a transform).
+fn needs(desc: &Desc, reach: &Reach) -> Vec<Need> {
+    let def_need = |d: &crate::desc::Def, kind| Need {
+        class: d.class.clone(),
+        kind,
+        origin: d.class_origin.clone(),
+        object: d.path(),
+    };
+    let mut out = vec![
+        def_need(&desc.cameras[&desc.render.camera], PluginKind::Camera),
+        Need {
+            object: "render.integrator".into(),
+            ..def_need(&desc.render.integrator, PluginKind::Integrator)
+        },
+    ];
+    out.extend(desc.lights.values().map(|l| def_need(l, PluginKind::Light)));
+    out.extend(
+        reach
+            .shaders
+            .iter()
+            .map(|s| def_need(&desc.shaders[s], PluginKind::Shader)),
+    );
+    out.extend(
+        reach
+            .objects
+            .iter()
+            .map(|o| def_need(&desc.objects[o].def, PluginKind::Object)),
+    );
+    if let Some(inst) = &reach.first_transform {
+        out.push(Need {
+            class: rtk_kernel::classes::INSTANCE_TRANSFORM.into(),
+            kind: PluginKind::Object,
+            origin: inst.origin.clone(),
+            object: inst.path.clone(),
+        });
+    }
+    out
+}
+
+/// Load the plugins the reachable scene needs (each once).
+pub(crate) fn load(
+    desc: &Desc,
+    reach: &Reach,
+    registry: &mut Registry,
+) -> Result<Vec<Arc<Plugin>>, SceneError> {
+    let mut plugins: Vec<Arc<Plugin>> = Vec::new();
+    for n in needs(desc, reach) {
+        let p = registry.get(&n.class).map_err(|e| class_error(e, &n))?;
+        if p.kind != n.kind {
+            return Err(SceneError::new(
+                ErrorKind::Plugin,
+                &n.origin,
+                &n.object,
+                "class",
+                format!(
+                    "class `{}` is a {} plugin, but a {} is needed here",
+                    n.class,
+                    p.kind.name(),
+                    n.kind.name()
+                ),
+            ));
+        }
+        if !plugins.iter().any(|q| Arc::ptr_eq(q, &p)) {
+            plugins.push(p);
+        }
+    }
+    Ok(plugins)
+}
+
+fn class_error(e: ClassError, n: &Need) -> SceneError {
+    let err = |msg: String| SceneError::new(ErrorKind::Plugin, &n.origin, &n.object, "class", msg);
+    match e {
+        ClassError::BadName => err(format!(
+            "`{}` is not a class name: use a plain identifier, never a path",
+            n.class
+        )),
+        ClassError::NotFound {
+            searched,
+            available,
+        } => {
+            let mut e = err(format!(
+                "unknown class `{}`: no {} on the plugin path",
+                n.class,
+                library_file_name(&n.class)
+            ))
+            .note("folders searched (--plugin-path, RTK_PLUGIN_PATH, <exe>/plugins, <exe dir>):");
+            for d in searched {
+                e = e.note(format!("  {}", d.display()));
+            }
+            e.note(if available.is_empty() {
+                "classes found there: none".to_string()
+            } else {
+                format!("classes found there: {}", available.join(", "))
+            })
+        }
+        ClassError::Refused(le) => err(le.to_string()),
+    }
+}

@@ -1,0 +1,233 @@
+//! Creating the DAG through the paper's steps: create (open) each reachable
+//! definition once, instance each child with its bindings, prepare (close).
+//! A definition instanced many times is created once; each transformed
+//! instance gets an instance-transform object of its own around it.
+
+use super::prepare::PrepareHost;
+use crate::desc::defs::merge_attributes;
+use crate::desc::{Def, Desc, Instance, ObjDef};
+use crate::error::{ErrorKind, SceneError};
+use crate::plugins::{Module, Registry};
+use crate::tree::Node;
+use rtk_kernel::abi::ObjectModuleRef;
+use rtk_kernel::host::{CallError, CreateArgs, Object, ObjectBuilder, Shader};
+use rtk_kernel::InstanceData;
+use std::collections::{BTreeMap, HashMap};
+use std::time::{Duration, Instant};
+
+/// Which shader object an instance binding uses: the definition's own, or a
+/// copy specialised by one instance's attribute block.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+enum ShaderKey {
+    Plain(String),
+    WithAttributes { shader: String, instance: String },
+}
+
+/// The state of one build.
+pub(crate) struct Builder<'a> {
+    pub desc: &'a Desc,
+    pub registry: &'a Registry,
+    pub scene_dir: String,
+    pub prepare_host: PrepareHost<'a>,
+    made: HashMap<String, Object>,
+    shader_ids: BTreeMap<ShaderKey, u32>,
+    pub shaders: Vec<Shader>,
+    pub objects_created: usize,
+    pub create_time: Duration,
+    pub prepare_time: Duration,
+}
+
+impl<'a> Builder<'a> {
+    pub(crate) fn new(
+        desc: &'a Desc,
+        registry: &'a Registry,
+        scene_dir: String,
+        prepare_host: PrepareHost<'a>,
+    ) -> Self {
+        Builder {
+            desc,
+            registry,
+            scene_dir,
+            prepare_host,
+            made: HashMap::new(),
+            shader_ids: BTreeMap::new(),
+            shaders: Vec::new(),
+            objects_created: 0,
+            create_time: Duration::ZERO,
+            prepare_time: Duration::ZERO,
+        }
+    }
+
+    /// The arguments of a `create` for the definition at `path`.
+    pub(crate) fn args<'b>(&'b self, path: &'b str) -> CreateArgs<'b> {
+        CreateArgs {
+            scene_dir: &self.scene_dir,
+            name: path,
+            image_width: self.desc.render.width,
+            image_height: self.desc.render.height,
+        }
+    }
+
+    /// The module of a class loaded in the loading step.
+    pub(crate) fn module(&self, class: &str) -> Module {
+        match self.registry.loaded_class(class) {
+            Some(p) => p.module,
+            None => unreachable!("class {class} was loaded before building"),
+        }
+    }
+
+    fn object_class(&self, class: &str) -> ObjectModuleRef {
+        match self.module(class) {
+            Module::Object(m) => m,
+            _ => unreachable!("kinds were checked when loading"),
+        }
+    }
+
+    /// The object an instance puts in its parent: the definition's object, or
+    /// an instance-transform object of its own around it.
+    pub(crate) fn instance(&mut self, inst: &Instance) -> Result<Object, SceneError> {
+        let child = self.object(&inst.object)?;
+        let Some(m) = &inst.transform else {
+            return Ok(child);
+        };
+        let class = rtk_kernel::classes::INSTANCE_TRANSFORM;
+        let fail = |e: CallError| {
+            SceneError::new(
+                ErrorKind::PluginCall,
+                &inst.origin,
+                &inst.path,
+                "transform",
+                format!("plugin `{class}` refused it: {e}"),
+            )
+        };
+        let t = Instant::now();
+        let module = self.object_class(class);
+        let mut b =
+            ObjectBuilder::from_transform(module, m, &self.args(&inst.path)).map_err(fail)?;
+        self.objects_created += 1;
+        b.add_child(&child, InstanceData::NONE).map_err(fail)?;
+        self.create_time += t.elapsed();
+        self.prepared(b).map_err(fail)
+    }
+
+    fn prepared(&mut self, b: ObjectBuilder) -> Result<Object, CallError> {
+        let t = Instant::now();
+        let r = b.prepare(&self.prepare_host);
+        self.prepare_time += t.elapsed();
+        r
+    }
+
+    /// Create (once) and prepare an object definition and its children.
+    fn object(&mut self, name: &str) -> Result<Object, SceneError> {
+        if let Some(o) = self.made.get(name) {
+            return Ok(o.clone());
+        }
+        let desc = self.desc;
+        let od = &desc.objects[name];
+        let def = &od.def;
+        let t = Instant::now();
+        let module = self.object_class(&def.class);
+        let created = ObjectBuilder::create(module, &def.params, &self.args(&def.path()));
+        self.create_time += t.elapsed();
+        let mut b = created.map_err(|e| call_error(def, None, "its parameters", e))?;
+        self.objects_created += 1;
+        for inst in &od.children {
+            let child = self.instance(inst)?;
+            let data = self.bindings(inst)?;
+            let t = Instant::now();
+            let added = b.add_child(&child, data);
+            self.create_time += t.elapsed();
+            added.map_err(|e| child_refused(od, inst, e))?;
+        }
+        let o = self
+            .prepared(b)
+            .map_err(|e| call_error(def, None, "to build", e))?;
+        self.made.insert(name.to_string(), o.clone());
+        Ok(o)
+    }
+
+    /// An instance's bindings: the id of its shader (created, or specialised
+    /// by its attribute block, on first use).
+    pub(crate) fn bindings(&mut self, inst: &Instance) -> Result<InstanceData, SceneError> {
+        let Some(s) = &inst.shader else {
+            return Ok(InstanceData::NONE);
+        };
+        let key = match &inst.attributes {
+            Some(_) => ShaderKey::WithAttributes {
+                shader: s.clone(),
+                instance: inst.path.clone(),
+            },
+            None => ShaderKey::Plain(s.clone()),
+        };
+        if let Some(id) = self.shader_ids.get(&key) {
+            return Ok(InstanceData { shader: *id });
+        }
+        let desc = self.desc;
+        let def = &desc.shaders[s];
+        let shader = self.create_shader(def, inst.attributes.as_ref())?;
+        let id = self.shaders.len() as u32;
+        self.shaders.push(shader);
+        self.shader_ids.insert(key, id);
+        Ok(InstanceData { shader: id })
+    }
+
+    fn create_shader(&mut self, def: &Def, attrs: Option<&Node>) -> Result<Shader, SceneError> {
+        let Module::Shader(module) = self.module(&def.class) else {
+            unreachable!("kinds were checked when loading")
+        };
+        let params = match attrs {
+            Some(a) => merge_attributes(&def.params, a, &def.path())?,
+            None => def.params.clone(),
+        };
+        let t = Instant::now();
+        let s = Shader::create(module, &params, &self.args(&def.path()));
+        self.create_time += t.elapsed();
+        s.map_err(|e| call_error(def, attrs, "its parameters", e))
+    }
+}
+
+/// A plugin's error mapped back to the definition's table (or to an attribute
+/// block that overrides it): an unknown key points at the key, any other
+/// error at the value, an error without a key at the class.
+pub(crate) fn call_error(def: &Def, attrs: Option<&Node>, what: &str, e: CallError) -> SceneError {
+    let class = &def.class;
+    let first_key = e.key.split(['.', '[']).next().unwrap_or("");
+    let (node, object) = match attrs {
+        Some(a) if !e.key.is_empty() && a.get(first_key).is_some() => {
+            (a, format!("{} (attributes)", def.path()))
+        }
+        _ => (&def.node, def.path()),
+    };
+    let origin = if e.key.is_empty() {
+        def.class_origin.clone()
+    } else if e.message.starts_with("unknown field") {
+        node.locate_origin(&e.key)
+    } else {
+        node.locate(&e.key).origin.clone()
+    };
+    let msg = if e.panicked {
+        format!("plugin `{class}` {e}")
+    } else {
+        format!("plugin `{class}` refused {what}: {}", e.message)
+    };
+    SceneError::new(ErrorKind::PluginCall, &origin, object, e.key, msg)
+}
+
+fn child_refused(od: &ObjDef, inst: &Instance, e: CallError) -> SceneError {
+    let origin = match (&od.children_origin, e.key.as_str()) {
+        (Some(o), "children") => o.clone(),
+        _ => inst.origin.clone(),
+    };
+    SceneError::new(
+        ErrorKind::PluginCall,
+        &origin,
+        od.def.path(),
+        "children",
+        format!(
+            "plugin `{}` refused child `{}`: {}",
+            od.def.class,
+            inst.object,
+            if e.panicked { e.to_string() } else { e.message }
+        ),
+    )
+}

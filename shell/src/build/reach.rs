@@ -1,0 +1,95 @@
+//! What is reachable from the root: the only definitions whose plugins are
+//! loaded and whose objects are created. The walk also refuses instancing
+//! cycles and DAGs deeper than the hit stack.
+
+use crate::desc::{Desc, Instance};
+use crate::error::{ErrorKind, SceneError};
+use rtk_kernel::HIT_STACK_DEPTH;
+use std::collections::{BTreeSet, HashMap};
+
+/// The definitions reachable from the root.
+pub(crate) struct Reach {
+    /// Object definitions, by name.
+    pub objects: BTreeSet<String>,
+    /// Shader definitions, by name.
+    pub shaders: BTreeSet<String>,
+    /// The first reachable instance with a transform (the instance-transform
+    /// class is loaded only if there is one; errors point at it).
+    pub first_transform: Option<Instance>,
+}
+
+/// The state of one walk.
+struct Walk<'d> {
+    desc: &'d Desc,
+    reach: Reach,
+    /// Levels each definition occupies (itself and below).
+    depth: HashMap<String, usize>,
+    /// The definitions on the current path, for cycle messages.
+    path: Vec<String>,
+}
+
+impl Reach {
+    /// Walk the DAG from the root.
+    pub(crate) fn walk(desc: &Desc) -> Result<Reach, SceneError> {
+        let mut w = Walk {
+            desc,
+            reach: Reach {
+                objects: BTreeSet::new(),
+                shaders: BTreeSet::new(),
+                first_transform: None,
+            },
+            depth: HashMap::new(),
+            path: Vec::new(),
+        };
+        let root = &desc.render.root;
+        let d = w.visit(root)?;
+        if d > HIT_STACK_DEPTH {
+            return Err(SceneError::new(
+                ErrorKind::Cycle,
+                &root.origin,
+                "render",
+                "root",
+                format!("the object DAG is {d} levels deep (transforms count as a level); rtk traces at most {HIT_STACK_DEPTH}"),
+            ));
+        }
+        Ok(w.reach)
+    }
+}
+
+impl Walk<'_> {
+    /// Visit an instance; returns the number of levels it occupies.
+    fn visit(&mut self, inst: &Instance) -> Result<usize, SceneError> {
+        if let Some(s) = &inst.shader {
+            self.reach.shaders.insert(s.clone());
+        }
+        let transform_level = usize::from(inst.transform.is_some());
+        if inst.transform.is_some() && self.reach.first_transform.is_none() {
+            self.reach.first_transform = Some(inst.clone());
+        }
+        if let Some(pos) = self.path.iter().position(|s| *s == inst.object) {
+            let mut cycle = self.path[pos..].to_vec();
+            cycle.push(inst.object.clone());
+            return Err(SceneError::new(
+                ErrorKind::Cycle,
+                &inst.object_origin,
+                &inst.path,
+                "object",
+                format!("instancing cycle: {}", cycle.join(" -> ")),
+            ));
+        }
+        if let Some(d) = self.depth.get(&inst.object) {
+            return Ok(d + transform_level);
+        }
+        self.reach.objects.insert(inst.object.clone());
+        self.path.push(inst.object.clone());
+        let desc = self.desc;
+        let mut deepest = 0;
+        for c in &desc.objects[&inst.object].children {
+            deepest = deepest.max(self.visit(c)?);
+        }
+        self.path.pop();
+        let d = 1 + deepest;
+        self.depth.insert(inst.object.clone(), d);
+        Ok(d + transform_level)
+    }
+}

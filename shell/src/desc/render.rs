@@ -1,0 +1,201 @@
+//! `[render]`: image size, samples, seed, camera, root, integrator,
+//! background, output.
+
+use super::check::{integer, number, string, unknown_keys};
+use super::defs::Def;
+use super::instance::Instance;
+use crate::error::SceneError;
+use crate::tree::{Node, Origin, Val};
+use std::collections::BTreeMap;
+
+/// Largest image, in pixels (the f64 film takes 24 bytes a pixel).
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+const KEYS: [&str; 9] = [
+    "width",
+    "height",
+    "spp",
+    "seed",
+    "camera",
+    "root",
+    "integrator",
+    "background",
+    "output",
+];
+const OBJ: &str = "render";
+
+/// `[render]` settings.
+#[derive(Debug, Clone)]
+pub struct Render {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seed of the per-pixel random streams.
+    pub seed: u64,
+    /// Camera definition name.
+    pub camera: String,
+    /// Where `camera` was given (or the `[render]` table).
+    pub camera_origin: Origin,
+    /// The root instance.
+    pub root: Instance,
+    /// The integrator.
+    pub integrator: Def,
+    /// Radiance of rays that leave the scene.
+    pub background: [f32; 3],
+    /// Default output file.
+    pub output: Option<String>,
+}
+
+impl Render {
+    /// Read `[render]` (the cameras are needed to pick the default one).
+    pub(crate) fn read(root: &Node, cameras: &BTreeMap<String, Def>) -> Result<Render, SceneError> {
+        let Some(r) = root.get("render") else {
+            return Err(SceneError::invalid(
+                &root.origin,
+                "",
+                "render",
+                "missing section [render] (at least `root = \"...\"`)",
+            ));
+        };
+        unknown_keys(r, OBJ, &KEYS)?;
+        let int = |k: &str, d: i64, min: i64, max: i64| -> Result<i64, SceneError> {
+            r.get(k).map_or(Ok(d), |n| integer(n, OBJ, k, min, max))
+        };
+        let (width, height) = (
+            int("width", 512, 1, 65536)? as u32,
+            int("height", 384, 1, 65536)? as u32,
+        );
+        if width as u64 * height as u64 > MAX_PIXELS {
+            return Err(SceneError::invalid(
+                &r.get("width").unwrap_or(r).origin,
+                OBJ,
+                "width",
+                format!("{width}x{height} is more than rtk's limit of {MAX_PIXELS} pixels; render it in crops"),
+            ));
+        }
+        let (camera, camera_origin) = camera(r, cameras)?;
+        let Some(rn) = r.get("root") else {
+            return Err(SceneError::invalid(
+                &r.origin,
+                OBJ,
+                "root",
+                "missing key `root` (the object to render)",
+            ));
+        };
+        Ok(Render {
+            width,
+            height,
+            spp: int("spp", 1, 1, 1 << 24)? as u32,
+            seed: int("seed", 0, 0, i64::MAX)? as u64,
+            camera,
+            camera_origin,
+            root: Instance::read(rn, "render.root")?,
+            integrator: integrator(r)?,
+            background: background(r)?,
+            output: r
+                .get("output")
+                .map(|n| string(n, OBJ, "output"))
+                .transpose()?,
+        })
+    }
+}
+
+/// The camera named, or the only one defined.
+fn camera(r: &Node, cameras: &BTreeMap<String, Def>) -> Result<(String, Origin), SceneError> {
+    if let Some(n) = r.get("camera") {
+        return Ok((string(n, OBJ, "camera")?, n.origin.clone()));
+    }
+    match cameras.len() {
+        1 => Ok((
+            cameras.keys().next().cloned().unwrap_or_default(),
+            r.origin.clone(),
+        )),
+        0 => Err(SceneError::invalid(
+            &r.origin,
+            OBJ,
+            "camera",
+            "the scene defines no camera: add a [cameras.NAME] table",
+        )),
+        _ => Err(SceneError::invalid(
+            &r.origin,
+            OBJ,
+            "camera",
+            format!(
+                "several cameras are defined ({}): say which with `camera = \"...\"`",
+                cameras.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
+        )),
+    }
+}
+
+/// `integrator = "class"` or `integrator = { class = "...", ... }`, by default
+/// the kernel's [`DEFAULT_INTEGRATOR`](rtk_kernel::classes::DEFAULT_INTEGRATOR).
+fn integrator(r: &Node) -> Result<Def, SceneError> {
+    let Some(n) = r.get("integrator") else {
+        return Ok(Def::implicit(
+            OBJ,
+            rtk_kernel::classes::DEFAULT_INTEGRATOR,
+            &r.origin,
+        ));
+    };
+    match &n.value {
+        Val::Str(_) => {
+            let table = Node {
+                origin: n.origin.clone(),
+                value: Val::Table(vec![("class".into(), n.origin.clone(), n.clone())]),
+            };
+            Def::read(OBJ, "integrator", &table, &[])
+        }
+        Val::Table(_) => Def::read(OBJ, "integrator", n, &[]),
+        v => Err(SceneError::invalid(
+            &n.origin,
+            OBJ,
+            "integrator",
+            format!(
+                "expected a class name or a table {{ class = \"...\", ... }}, found {}",
+                v.type_name()
+            ),
+        )),
+    }
+}
+
+/// `background = [r, g, b]`, finite and not negative; black by default.
+fn background(r: &Node) -> Result<[f32; 3], SceneError> {
+    let Some(n) = r.get("background") else {
+        return Ok([0.0; 3]);
+    };
+    let Val::Arr(a) = &n.value else {
+        return Err(SceneError::invalid(
+            &n.origin,
+            OBJ,
+            "background",
+            "expected [r, g, b]",
+        ));
+    };
+    if a.len() != 3 {
+        return Err(SceneError::invalid(
+            &n.origin,
+            OBJ,
+            "background",
+            "expected [r, g, b]",
+        ));
+    }
+    let mut out = [0.0f32; 3];
+    for (i, c) in a.iter().enumerate() {
+        let key = format!("background[{i}]");
+        let v = number(c, OBJ, &key)?;
+        if v < 0.0 {
+            return Err(SceneError::invalid(
+                &c.origin,
+                OBJ,
+                key,
+                "must not be negative",
+            ));
+        }
+        out[i] = v as f32;
+    }
+    Ok(out)
+}

@@ -1,0 +1,68 @@
+//! The plugin path: the folders searched, in order.
+
+use super::{is_identifier, library_file_name};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The folders searched for plugins, in order.
+#[derive(Debug, Clone, Default)]
+pub struct PluginPath {
+    /// The folders.
+    pub dirs: Vec<PathBuf>,
+}
+
+impl PluginPath {
+    /// `extra` (from `--plugin-path`), then `RTK_PLUGIN_PATH`, then `plugins/`
+    /// beside the executable, then the executable's folder.
+    pub fn standard(extra: &[PathBuf]) -> Self {
+        let mut dirs: Vec<PathBuf> = extra.to_vec();
+        if let Some(v) = std::env::var_os("RTK_PLUGIN_PATH") {
+            dirs.extend(std::env::split_paths(&v).filter(|p| !p.as_os_str().is_empty()));
+        }
+        if let Some(exe_dir) = std::env::current_exe()
+            .ok()
+            .and_then(|p| p.parent().map(Path::to_path_buf))
+        {
+            dirs.push(exe_dir.join("plugins"));
+            dirs.push(exe_dir);
+        }
+        PluginPath { dirs }
+    }
+
+    /// The first library for `class` along the path.
+    pub fn find(&self, class: &str) -> Option<PathBuf> {
+        let name = library_file_name(class);
+        self.dirs
+            .iter()
+            .map(|d| d.join(&name))
+            .find(|p| p.is_file())
+    }
+
+    /// Every class available along the path (the first folder holding a
+    /// class wins), by name.
+    pub fn available(&self) -> BTreeMap<String, PathBuf> {
+        let (pre, suf) = (
+            format!("{}rtk_", std::env::consts::DLL_PREFIX),
+            std::env::consts::DLL_SUFFIX,
+        );
+        let mut out = BTreeMap::new();
+        for d in &self.dirs {
+            let Ok(rd) = std::fs::read_dir(d) else {
+                continue;
+            };
+            let mut names: Vec<_> = rd
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            names.sort();
+            for n in names {
+                if let Some(class) = n.strip_prefix(&pre).and_then(|r| r.strip_suffix(suf)) {
+                    if is_identifier(class) {
+                        out.entry(class.to_string()).or_insert_with(|| d.join(&n));
+                    }
+                }
+            }
+        }
+        out
+    }
+}
