@@ -117,17 +117,7 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     let desc = rtk_shell::Desc::from_file(&file)?;
     let parse_time = t_parse.elapsed();
 
-    let out = match (&a.output, &desc.render.output) {
-        (Some(o), _) => o.clone(),
-        (None, Some(o)) => PathBuf::from(o),
-        (None, None) => PathBuf::from(format!(
-            "{}.png",
-            a.scene
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "render".into())
-        )),
-    };
+    let out = output_path(&a, desc.render.output.as_deref());
     output::check_writable(&out)?;
 
     let mut registry = Registry::new(PluginPath::standard(&a.plugin_path));
@@ -140,48 +130,15 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     let render_time = t_render.elapsed();
     let t_write = Instant::now();
     output::write(&film, &out)?;
-    let write_time = t_write.elapsed();
+    let times = StepTimes {
+        parse: parse_time,
+        render: render_time,
+        write: t_write.elapsed(),
+        start,
+    };
 
     if a.stats {
-        let s = &film.stats;
-        let mapped = mapped_plugins();
-        let json = serde_json::json!({
-            "scene": a.scene.display().to_string(),
-            "output": out.display().to_string(),
-            "width": film.width,
-            "height": film.height,
-            "spp": world.desc.render.spp,
-            "threads": threads,
-            "seconds": {
-                "parse": parse_time.as_secs_f64(),
-                "load_plugins": world.timings.load_plugins.as_secs_f64(),
-                "create": world.timings.create.as_secs_f64(),
-                "prepare": world.timings.prepare.as_secs_f64(),
-                "render": render_time.as_secs_f64(),
-                "write": write_time.as_secs_f64(),
-                "total": start.elapsed().as_secs_f64(),
-            },
-            "plugins_loaded": world.plugins.iter().map(|p| p.class.clone()).collect::<Vec<_>>(),
-            "plugins_mapped": mapped,
-            "objects_created": world.objects_created,
-            "shaders_created": world.shaders.len(),
-            "lights": world.lights.len(),
-            "files_read": world.files_read,
-            "rays": rays_json(s),
-            "local_geom": {
-                "calls": s.local_geom_calls,
-                "position": s.local_geom_fields[bit(geom_mask::POSITION)],
-                "geometric_normal": s.local_geom_fields[bit(geom_mask::GEOMETRIC_NORMAL)],
-                "shading_normal": s.local_geom_fields[bit(geom_mask::SHADING_NORMAL)],
-                "tangents": s.local_geom_fields[bit(geom_mask::TANGENTS)],
-                "uv": s.local_geom_fields[bit(geom_mask::UV)],
-            },
-            "node_tests": s.node_tests,
-            "prim_tests": s.prim_tests,
-            "shader_calls": s.shader_calls,
-            "light_samples": s.light_samples,
-            "nonfinite_samples": s.nonfinite_samples,
-        });
+        let json = stats_json(&a, &out, &world, &film, threads, &times);
         // A closed pipe (`| head`) is not an error worth a panic.
         use std::io::Write;
         let _ = writeln!(
@@ -201,6 +158,78 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `-o`, else `[render] output`, else the scene's name with `.png`.
+fn output_path(a: &RenderArgs, scene_output: Option<&str>) -> PathBuf {
+    match (&a.output, scene_output) {
+        (Some(o), _) => o.clone(),
+        (None, Some(o)) => PathBuf::from(o),
+        (None, None) => PathBuf::from(format!(
+            "{}.png",
+            a.scene
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "render".into())
+        )),
+    }
+}
+
+/// How long the host's own steps took.
+struct StepTimes {
+    parse: std::time::Duration,
+    render: std::time::Duration,
+    write: std::time::Duration,
+    start: Instant,
+}
+
+/// The `--stats` record.
+fn stats_json(
+    a: &RenderArgs,
+    out: &Path,
+    world: &rtk_shell::World,
+    film: &render::Film,
+    threads: usize,
+    t: &StepTimes,
+) -> serde_json::Value {
+    let s = &film.stats;
+    serde_json::json!({
+        "scene": a.scene.display().to_string(),
+        "output": out.display().to_string(),
+        "width": film.width,
+        "height": film.height,
+        "spp": world.desc.render.spp,
+        "threads": threads,
+        "seconds": {
+            "parse": t.parse.as_secs_f64(),
+            "load_plugins": world.timings.load_plugins.as_secs_f64(),
+            "create": world.timings.create.as_secs_f64(),
+            "prepare": world.timings.prepare.as_secs_f64(),
+            "render": t.render.as_secs_f64(),
+            "write": t.write.as_secs_f64(),
+            "total": t.start.elapsed().as_secs_f64(),
+        },
+        "plugins_loaded": world.plugins.iter().map(|p| p.class.clone()).collect::<Vec<_>>(),
+        "plugins_mapped": mapped_plugins(),
+        "objects_created": world.objects_created,
+        "shaders_created": world.shaders.len(),
+        "lights": world.lights.len(),
+        "files_read": world.files_read,
+        "rays": rays_json(s),
+        "local_geom": {
+            "calls": s.local_geom_calls,
+            "position": s.local_geom_fields[bit(geom_mask::POSITION)],
+            "geometric_normal": s.local_geom_fields[bit(geom_mask::GEOMETRIC_NORMAL)],
+            "shading_normal": s.local_geom_fields[bit(geom_mask::SHADING_NORMAL)],
+            "tangents": s.local_geom_fields[bit(geom_mask::TANGENTS)],
+            "uv": s.local_geom_fields[bit(geom_mask::UV)],
+        },
+        "node_tests": s.node_tests,
+        "prim_tests": s.prim_tests,
+        "shader_calls": s.shader_calls,
+        "light_samples": s.light_samples,
+        "nonfinite_samples": s.nonfinite_samples,
+    })
 }
 
 fn bit(mask: u32) -> usize {

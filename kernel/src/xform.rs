@@ -1,5 +1,5 @@
 //! Affine transforms from a matrix or a list of steps, composed in f64
-//! (numerics.md rule 8) and checked: non-finite entries, singular and
+//! (docs/numerics.md rule 9) and checked: non-finite entries, singular and
 //! badly conditioned matrices are refused with the key that caused them.
 //! The shell uses this to validate instance transforms; the `transform`
 //! plugin uses it to build its matrices.
@@ -49,7 +49,7 @@ pub struct AxisAngle {
 }
 
 /// Largest condition number accepted (an f64 estimate): beyond it normals and
-/// inverse rays lose all precision in f32 (numerics.md X2).
+/// inverse rays lose all precision in f32 (docs/numerics.md X2).
 pub const MAX_CONDITION: f64 = 1e7;
 
 fn finite(key: &str, v: &[f64]) -> Result<(), PluginError> {

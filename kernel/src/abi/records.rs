@@ -12,6 +12,10 @@
 //!   an [`ErrSink`] the caller owns;
 //! - **hot** entries (queries, shading, sampling) never allocate and return no
 //!   status: a failure is recorded in the [`TraceCtx`] with the plugin's name.
+//!
+//! `create` and `destroy` have the same signature in every module, yet are
+//! spelled out in each: abi_stable's derive reads a function pointer's
+//! layout from the field's own type (an alias does not implement `StableAbi`).
 
 use super::*;
 use abi_stable::std_types::RStr;

@@ -1,7 +1,7 @@
-//! Robust geometric routines shared by plugins, `rtk stress` and the f64
+//! Robust geometric routines shared by plugins, the tests and the f64
 //! reference: one implementation, generic over [`Real`] (f32 and f64).
 //!
-//! The rules they follow are `research/numerics.md`'s: hit points carry an
+//! The rules they follow are `docs/numerics.md`'s: hit points carry an
 //! error bound, spawned rays are offset past it along the geometric normal
 //! (no scene epsilon), slab tests are conservative and NaN-ordered, and a hit
 //! is accepted only when `t_min < t < t_max` and finite.

@@ -93,7 +93,7 @@ mod tests {
         }
     }
 
-    /// numerics.md S1: rays spawned from triangle hits, over the hemisphere
+    /// docs/numerics.md S1: rays spawned from triangle hits, over the hemisphere
     /// the incoming ray came from, never re-hit the triangle, at every scale.
     #[test]
     fn no_self_hits_off_triangles() {

@@ -1,4 +1,4 @@
-//! The conservative, NaN-ordered ray/box slab test (numerics.md A1, A2).
+//! The conservative, NaN-ordered ray/box slab test (docs/numerics.md A1, A2).
 
 use crate::abi::{Bounds3, Ray};
 use crate::geom::{gamma, Real};
@@ -95,7 +95,7 @@ mod tests {
 
     #[test]
     fn origin_on_face_parallel_ray_hits() {
-        // numerics.md A1: d = (0,0,1) from the x = 0 face, the x = 1 face and the x = y = 1 edge.
+        // docs/numerics.md A1: d = (0,0,1) from the x = 0 face, the x = 1 face and the x = y = 1 edge.
         for o in [
             Vec3::new(0.0, 0.5, -1.0),
             Vec3::new(1.0, 0.5, -1.0),
@@ -165,7 +165,7 @@ mod tests {
 
     #[test]
     fn flat_box_far_from_origin_is_not_culled() {
-        // numerics.md A2: a flat box at |c| = 1e5 hit by rays aimed at it.
+        // docs/numerics.md A2: a flat box at |c| = 1e5 hit by rays aimed at it.
         let c = 1e5f32;
         let b = Bounds3::new(Vec3::new(c, c, c), Vec3::new(c + 1.0, c + 1.0, c));
         let mut misses = 0;

@@ -1,7 +1,7 @@
 //! Ray/sphere intersection in the formulation of Haines, Günther and
 //! Akenine-Möller (Ray Tracing Gems ch. 7): the discriminant from
 //! `r² − |f − (f·d)d/|d|²|²` and the stable root `q`, which stays accurate when
-//! the sphere is far away or tiny compared with the distance (numerics.md Q1, Q2).
+//! the sphere is far away or tiny compared with the distance (docs/numerics.md Q1, Q2).
 
 use super::{gamma, Real};
 
@@ -140,7 +140,7 @@ mod tests {
         assert_eq!((h.t0, h.t1), (2.0, 3.0));
     }
 
-    /// numerics.md Q1: a unit sphere at distance 1e4 — hit/miss classification
+    /// docs/numerics.md Q1: a unit sphere at distance 1e4 — hit/miss classification
     /// against the f64 evaluation of the same formula on the same f32 inputs.
     #[test]
     fn far_sphere_classification_matches_f64() {
@@ -162,7 +162,7 @@ mod tests {
                 mismatch += 1;
             }
         }
-        // numerics.md: RTG-7 measured 8.5e-5 at 1e4 (textbook: 54 %).
+        // docs/numerics.md: RTG-7 measured 8.5e-5 at 1e4 (textbook: 54 %).
         assert!(
             (mismatch as f64) / (n as f64) < 1e-3,
             "mismatch {mismatch}/{n}"

@@ -2,12 +2,12 @@
 //! pbrt-v4's form: shear the triangle into ray space, compute the edge
 //! functions with one rounding less, and accept on consistent signs. Two
 //! rechecks in f64 keep it watertight where f32 cannot decide
-//! (numerics.md T1–T4):
+//! (docs/numerics.md T1–T4):
 //! - an edge function that is exactly zero in f32 (the ray runs along an
 //!   edge or through a vertex) is recomputed in f64 (pbrt-v4);
 //! - a hit whose `t` lies within its own error bound of the origin is
 //!   rechecked in f64 instead of being rejected, which pbrt does and which
-//!   opens rare holes at vertices with nearly edge-on fans (rule 6).
+//!   opens rare holes at vertices with nearly edge-on fans (docs/numerics.md rule 4).
 
 use super::{gamma, Real};
 
@@ -198,7 +198,7 @@ pub fn intersect_triangle(
     }
 }
 
-/// The hit point reconstructed from barycentrics (numerics.md rule 3) and its
+/// The hit point reconstructed from barycentrics (docs/numerics.md rule 6) and its
 /// error bound `γ₇ Σ|bᵢpᵢ|`.
 #[inline]
 pub fn triangle_point_and_error(p: [[f32; 3]; 3], b: [f32; 3]) -> ([f32; 3], [f32; 3]) {
@@ -262,7 +262,7 @@ mod tests {
         );
     }
 
-    /// numerics.md T1: rays aimed at the shared diagonal of a quad, at several
+    /// docs/numerics.md T1: rays aimed at the shared diagonal of a quad, at several
     /// scales and offsets: none may pass between the two triangles.
     #[test]
     fn shared_edge_is_watertight() {
@@ -306,7 +306,7 @@ mod tests {
         }
     }
 
-    /// numerics.md T2 (pbrt-v4's `Triangle.Watertight` recipe): a 16x16 UV
+    /// docs/numerics.md T2 (pbrt-v4's `Triangle.Watertight` recipe): a 16x16 UV
     /// sphere with vertex radii jittered in [1, 6] and exactly shared poles
     /// and seam; rays from inside the r = 0.5 ball aimed exactly at vertices
     /// and at random, with the mesh at |c| = 0, 1e3 and 1e5 — every ray must
@@ -394,7 +394,7 @@ mod tests {
         }
     }
 
-    /// numerics.md T4: huge coordinates never give a non-finite t.
+    /// docs/numerics.md T4: huge coordinates never give a non-finite t.
     #[test]
     fn huge_coordinates_never_non_finite() {
         for e in 7..31 {

@@ -3,6 +3,7 @@
 
 use super::handles::Shader;
 use crate::abi::*;
+use crate::sdk::shims::write_some;
 use crate::sdk::Decl;
 use glam::Vec3;
 use std::ffi::c_void;
@@ -277,13 +278,7 @@ unsafe extern "C" fn svc_sample_light<H: Services>(
     // SAFETY: as above; `out` is a valid output record.
     unsafe {
         guard::<H, _>(host, ctx, "sample_light", false, |h, c| {
-            match h.sample_light(c, index, (*p).v(), *u, time) {
-                Some(s) => {
-                    *out = s;
-                    true
-                }
-                None => false,
-            }
+            write_some(out, h.sample_light(c, index, (*p).v(), *u, time))
         })
     }
 }

@@ -88,12 +88,22 @@ impl Child {
     /// Box over `[time0, time1]`; an error names the child's class.
     pub fn bounds(&self, time0: f32, time1: f32) -> Result<Bounds3, PluginError> {
         let mut b = Bounds3::EMPTY;
-        let mut c = Collected::default();
-        // SAFETY: as in `intersect`; `c` outlives the call.
-        let st =
-            unsafe { (self.obj.class.bounds())(self.obj.this, time0, time1, &mut b, c.sink()) };
-        c.result(st, "bounds").map_err(|e| self.error(e))?;
+        self.cold("bounds", |this, sink| {
+            // SAFETY: `this` is live (see `Child::new`); `b` outlives the call.
+            unsafe { (self.obj.class.bounds())(this, time0, time1, &mut b, sink) }
+        })?;
         Ok(b)
+    }
+
+    /// Run a cold entry with an error sink; a failure names the child's class.
+    fn cold(
+        &self,
+        entry: &'static str,
+        call: impl FnOnce(*const std::ffi::c_void, ErrSink) -> i32,
+    ) -> Result<(), PluginError> {
+        let mut c = Collected::default();
+        let st = call(self.obj.this, c.sink());
+        c.result(st, entry).map_err(|e| self.error(e))
     }
 
     /// The child's primitive set, when its class offers the protocol.
@@ -131,12 +141,9 @@ impl PrimSet {
             return Ok(0);
         };
         let mut n = 0;
-        let mut c = Collected::default();
-        // SAFETY: the child's object is live (see `Child::new`); `n` and `c`
-        // outlive the call.
-        let st = unsafe { f(self.child.obj.this, &mut n, c.sink()) };
-        c.result(st, "prim_count")
-            .map_err(|e| self.child.error(e))?;
+        // SAFETY: the child's object is live (see `Child::new`); `n` outlives the call.
+        self.child
+            .cold("prim_count", |this, sink| unsafe { f(this, &mut n, sink) })?;
         Ok(n)
     }
 
@@ -146,10 +153,10 @@ impl PrimSet {
             return Ok(());
         };
         let n = u32::try_from(out.len()).map_err(|_| PluginError::msg("too many boxes"))?;
-        let mut c = Collected::default();
         // SAFETY: as in `count`; `out` has room for `n` boxes.
-        let st = unsafe { f(self.child.obj.this, first, n, out.as_mut_ptr(), c.sink()) };
-        c.result(st, "prim_bounds").map_err(|e| self.child.error(e))
+        self.child.cold("prim_bounds", |this, sink| unsafe {
+            f(this, first, n, out.as_mut_ptr(), sink)
+        })
     }
 
     /// Nearest hit among `ids`; writes `hit.stack[level]` as the child's

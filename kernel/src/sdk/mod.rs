@@ -39,7 +39,7 @@ mod child;
 pub mod params;
 mod scene;
 pub mod shading;
-mod shims;
+pub(crate) mod shims;
 
 use crate::abi::*;
 use serde::de::DeserializeOwned;

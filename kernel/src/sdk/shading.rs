@@ -103,6 +103,26 @@ pub fn same_side(g: &LocalGeom, wo: Vec3, wi: Vec3) -> bool {
     n.dot(wo) * n.dot(wi) > 0.0
 }
 
+/// Sample a reflection lobe by its cosine: `wi` from [`cosine_sample`], and
+/// the sample's weight `f(wi)·|cos θi| / pdf` for the BRDF `f`.
+#[inline]
+pub fn cosine_lobe_sample(
+    g: &LocalGeom,
+    wo: Vec3,
+    u: [f32; 2],
+    lobe_bits: u32,
+    f: impl FnOnce(Vec3) -> Color,
+) -> Option<BsdfSample> {
+    let (wi, pdf) = cosine_sample(g, wo, u)?;
+    let cos = g.ns.v().dot(wi).abs();
+    Some(BsdfSample {
+        wi: wi.into(),
+        weight: f(wi).scale(cos / pdf),
+        pdf,
+        lobe: lobe_bits,
+    })
+}
+
 /// Density of [`cosine_sample`] choosing `wi` (0 on the other side).
 #[inline]
 pub fn cosine_pdf(g: &LocalGeom, wo: Vec3, wi: Vec3) -> f32 {

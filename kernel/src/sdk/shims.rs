@@ -132,6 +132,22 @@ unsafe fn hot<D: Decl, R>(
     }
 }
 
+/// Write an optional result to the entry's output record; true when there was one.
+///
+/// # Safety
+/// `out` must be valid for writes.
+#[inline(always)]
+pub(crate) unsafe fn write_some<T>(out: *mut T, v: Option<T>) -> bool {
+    match v {
+        Some(v) => {
+            // SAFETY: guaranteed by the caller.
+            unsafe { *out = v };
+            true
+        }
+        None => false,
+    }
+}
+
 /// # Safety
 /// `this` must be a live object of type `T` made by this plugin.
 #[inline(always)]
@@ -502,13 +518,10 @@ unsafe extern "C" fn sh_sample<T: Shader, D: Decl>(
     // SAFETY: the caller passes the live shader and valid records.
     unsafe {
         hot::<D, _>(ctx, "sample", false, |ctx| {
-            match obj::<T>(this).sample(ctx, &*geom, (*wo).v(), *u, lobes) {
-                Some(s) => {
-                    *out = s;
-                    true
-                }
-                None => false,
-            }
+            write_some(
+                out,
+                obj::<T>(this).sample(ctx, &*geom, (*wo).v(), *u, lobes),
+            )
         })
     }
 }
@@ -605,13 +618,7 @@ unsafe extern "C" fn light_sample_li<T: Light, D: Decl>(
     // SAFETY: the caller passes the live light and valid records.
     unsafe {
         hot::<D, _>(ctx, "sample_li", false, |ctx| {
-            match obj::<T>(this).sample_li(ctx, (*p).v(), *u, time) {
-                Some(s) => {
-                    *out = s;
-                    true
-                }
-                None => false,
-            }
+            write_some(out, obj::<T>(this).sample_li(ctx, (*p).v(), *u, time))
         })
     }
 }

@@ -1,7 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::shading::{cosine_sample, same_side};
+use rtk_kernel::sdk::shading::{cosine_lobe_sample, same_side};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::f32::consts::FRAC_1_PI;
@@ -53,15 +53,7 @@ impl Shader for Lambert {
         if lobes & lobe::DIFFUSE == 0 || lobes & lobe::REFLECTION == 0 {
             return None;
         }
-        let (wi, pdf) = cosine_sample(g, wo, u)?;
-        // f·cos/pdf with pdf = cos/π: the albedo.
-        let cos = g.ns.v().dot(wi).abs();
-        Some(BsdfSample {
-            wi: wi.into(),
-            weight: self.f.scale(cos / pdf),
-            pdf,
-            lobe: lobe::DIFFUSE | lobe::REFLECTION,
-        })
+        cosine_lobe_sample(g, wo, u, lobe::DIFFUSE | lobe::REFLECTION, |_| self.f)
     }
 }
 

@@ -1,7 +1,9 @@
 #![doc = include_str!("../README.md")]
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::shading::{cosine_sample, fresnel_dielectric, reflect, refract, same_side};
+use rtk_kernel::sdk::shading::{
+    cosine_lobe_sample, fresnel_dielectric, reflect, refract, same_side,
+};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -154,14 +156,8 @@ impl Shader for Phong {
         if lobes & (lobe::DIFFUSE | lobe::GLOSSY) == 0 || lobes & lobe::REFLECTION == 0 {
             return None;
         }
-        let (wi, pdf) = cosine_sample(g, wo, u)?;
-        let cos = g.ns.v().dot(wi).abs();
-        Some(BsdfSample {
-            wi: wi.into(),
-            weight: self.brdf(g, wo, wi).scale(cos / pdf),
-            pdf,
-            lobe: lobe::DIFFUSE | lobe::GLOSSY | lobe::REFLECTION,
-        })
+        let bits = lobe::DIFFUSE | lobe::GLOSSY | lobe::REFLECTION;
+        cosine_lobe_sample(g, wo, u, bits, |wi| self.brdf(g, wo, wi))
     }
 }
 

@@ -98,26 +98,8 @@ fn build_world(
         host,
     );
     let t1 = Instant::now();
-    let camera = create_def(&b, &desc.cameras[&desc.render.camera], |m, p, a| match m {
-        Module::Camera(c) => Some(Camera::create(c, p, a)),
-        _ => None,
-    })?;
-    let integrator = create_def(&b, &desc.render.integrator, |m, p, a| match m {
-        Module::Integrator(c) => Some(Integrator::create(c, p, a)),
-        _ => None,
-    })?;
-    let lights = desc
-        .lights
-        .values()
-        .map(|l| {
-            create_def(&b, l, |m, p, a| match m {
-                Module::Light(c) => Some(Light::create(c, p, a)),
-                _ => None,
-            })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let (camera, integrator, lights) = create_others(&b, &desc)?;
     b.create_time += t1.elapsed();
-
     let root_inst = &desc.render.root;
     let root = b.instance(root_inst)?;
     let root_bind = b.bindings(root_inst)?;
@@ -157,6 +139,29 @@ fn build_world(
         timings,
         objects_created,
     })
+}
+
+/// The camera, the integrator and the lights.
+fn create_others(b: &Builder, desc: &Desc) -> Result<(Camera, Integrator, Vec<Light>), SceneError> {
+    let camera = create_def(b, &desc.cameras[&desc.render.camera], |m, p, a| match m {
+        Module::Camera(c) => Some(Camera::create(c, p, a)),
+        _ => None,
+    })?;
+    let integrator = create_def(b, &desc.render.integrator, |m, p, a| match m {
+        Module::Integrator(c) => Some(Integrator::create(c, p, a)),
+        _ => None,
+    })?;
+    let lights = desc
+        .lights
+        .values()
+        .map(|l| {
+            create_def(b, l, |m, p, a| match m {
+                Module::Light(c) => Some(Light::create(c, p, a)),
+                _ => None,
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((camera, integrator, lights))
 }
 
 /// Create a camera, integrator or light from its definition; `make` picks
