@@ -68,17 +68,15 @@ impl Services for Tracer<'_> {
         self.world.root.occluded(ctx, ray)
     }
 
-    fn local_geom(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &Hit, mask: u32) -> LocalGeom {
+    fn local_geom(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &Hit, mask: u32, out: &mut LocalGeom) {
         ctx.stats.local_geom_calls += 1;
         for (bit, n) in ctx.stats.local_geom_fields.iter_mut().enumerate() {
             *n += ((mask >> bit) & 1) as u64;
         }
-        let mut g = LocalGeom::EMPTY;
-        self.world.root.local_geom(ctx, ray, hit, mask, &mut g);
-        if g.shader == NONE_ID {
-            g.shader = self.world.root_inst.shader;
+        self.world.root.local_geom(ctx, ray, hit, mask, out);
+        if out.shader == NONE_ID {
+            out.shader = self.world.root_inst.shader;
         }
-        g
     }
 
     fn background(&self, _ctx: &mut TraceCtx, _ray: &Ray) -> Color {

@@ -75,14 +75,6 @@ fn panic_in_local_geom() {
     );
 }
 
-#[test]
-fn a_failure_recorded_without_a_panic_names_the_plugin() {
-    says(
-        &run("fail"),
-        "plugin `panicky` deliberate failure in intersect",
-    );
-}
-
 /// A panic in a shadow ray's any-hit query, reached through a light and a
 /// Lambert shader: the failure crosses two more plugins and still stops the render.
 #[test]

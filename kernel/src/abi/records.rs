@@ -246,6 +246,9 @@ pub struct ShaderRef {
     pub this: *const c_void,
     /// Its class's record.
     pub class: ShaderModuleRef,
+    /// The [`lobe`] kinds it has (asked once, when it was created), so an
+    /// integrator skips queries for lobes a material lacks.
+    pub lobes: u32,
 }
 
 /// The root module of a shader plugin. Shaders answer material queries;
@@ -266,6 +269,8 @@ pub struct ShaderModule {
     ) -> *mut c_void,
     /// Destroy.
     pub destroy: unsafe extern "C" fn(this: *mut c_void),
+    /// The [`lobe`] kinds this shader has (called once, after `create`).
+    pub lobes: unsafe extern "C" fn(this: *const c_void, out: *mut u32, sink: ErrSink) -> i32,
     /// BSDF value f(wo, wi), cosine not included; both directions unit, pointing away.
     pub eval: unsafe extern "C" fn(
         this: *const c_void,

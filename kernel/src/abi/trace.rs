@@ -1,11 +1,12 @@
 //! The per-thread trace context passed to every hot-path call.
 //!
 //! It is plain data: counters, the random stream, the query counter and a
-//! failure record. A plugin that fails on the hot path (a panic caught by the
-//! SDK, or [`TraceCtx::fail`]) writes the failure *into the context*, with its
-//! class name; the host reads it after every camera sample, stops the render
-//! and exits with that name. Holding no pointer, the context cannot be turned
-//! against the plugins that read it.
+//! failure record. A plugin that fails on the hot path panics with a message;
+//! the SDK catches the panic and writes the failure *into the context*, with
+//! the plugin's class name; the host reads it after every camera sample,
+//! stops the render and exits with that name. (The success path costs
+//! nothing: no flag is checked on the way out of an entry.) Holding no
+//! pointer, the context cannot be turned against the plugins that read it.
 
 use abi_stable::StableAbi;
 
@@ -134,13 +135,6 @@ impl TraceCtx {
         self.next_query
     }
 
-    /// Record that the calling plugin failed: the render stops after this
-    /// camera sample and rtk exits with the message and the plugin's name.
-    /// Only the first failure on a context is kept.
-    pub fn fail(&mut self, message: &str) {
-        self.record_failure("", message);
-    }
-
     /// Has a plugin failed on this context.
     #[inline]
     pub fn failed(&self) -> bool {
@@ -162,24 +156,13 @@ impl TraceCtx {
         ))
     }
 
-    /// Record a failure of `class` (empty: the caller's class, filled in by
-    /// the SDK when the plugin's entry returns). The first one wins.
+    /// Record a failure of `class`. The first one wins.
     pub(crate) fn record_failure(&mut self, class: &str, message: &str) {
         let f = &mut self.failure;
         if f.failed == 0 {
             f.failed = 1;
             f.message_len = copy_cut(&mut f.message, message) as u32;
             f.class_len = copy_cut(&mut f.class, class) as u32;
-        } else if f.class_len == 0 && !class.is_empty() {
-            f.class_len = copy_cut(&mut f.class, class) as u32;
-        }
-    }
-
-    /// Name the class of a failure recorded without one (by [`TraceCtx::fail`]).
-    #[inline]
-    pub(crate) fn claim_failure(&mut self, class: &str) {
-        if self.failure.failed != 0 && self.failure.class_len == 0 {
-            self.record_failure(class, "");
         }
     }
 }
@@ -297,13 +280,11 @@ mod tests {
     }
 
     #[test]
-    fn the_first_failure_wins_and_is_claimed_once() {
+    fn the_first_failure_wins() {
         let mut c = TraceCtx::new(0, 1, 0);
         assert!(c.failure().is_none());
-        c.fail("bad input");
-        c.claim_failure("inner");
+        c.record_failure("inner", "bad input");
         c.record_failure("outer", "later");
-        c.claim_failure("outer");
         assert_eq!(c.failure(), Some(("inner", "bad input")));
     }
 

@@ -223,11 +223,12 @@ impl Object {
 // ---------------------------------------------------------------- other kinds
 
 macro_rules! handle {
-    ($(#[$doc:meta])* $name:ident, $module:ident) => {
+    ($(#[$doc:meta])* $name:ident, $module:ident $(, $extra:ident: $ty:ty = $init:expr)?) => {
         $(#[$doc])*
         pub struct $name {
             this: *mut c_void,
             class: $module,
+            $($extra: $ty,)?
         }
 
         // SAFETY: the plugin object is immutable after creation and its class
@@ -250,7 +251,10 @@ macro_rules! handle {
                     // SAFETY: the text, environment and sink are valid for the call.
                     unsafe { (class.create())(params.as_ptr(), params.len(), env, sink) }
                 })?;
-                Ok($name { this, class })
+                #[allow(unused_mut)]
+                let mut made = $name { this, class, $($extra: Default::default(),)? };
+                $( made.$extra = $init(&made)?; )?
+                Ok(made)
             }
 
             /// The class name.
@@ -262,9 +266,10 @@ macro_rules! handle {
 }
 
 handle!(
-    /// A created shader.
+    /// A created shader, with the lobe kinds it reported once.
     Shader,
-    ShaderModuleRef
+    ShaderModuleRef,
+    lobes: u32 = Shader::ask_lobes
 );
 handle!(
     /// A created light.
@@ -288,7 +293,16 @@ impl Shader {
         ShaderRef {
             this: self.this,
             class: self.class,
+            lobes: self.lobes,
         }
+    }
+
+    fn ask_lobes(&self) -> Result<u32, CallError> {
+        let (mut lobes, mut c) = (0, Collected::default());
+        // SAFETY: the shader is live; the outputs outlive the call.
+        let st = unsafe { (self.class.lobes())(self.this, &mut lobes, c.sink()) };
+        c.result(st, "lobes")?;
+        Ok(lobes)
     }
 }
 

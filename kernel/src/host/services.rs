@@ -4,7 +4,6 @@
 use super::handles::Shader;
 use crate::abi::*;
 use crate::sdk::shims::write_some;
-use crate::sdk::Decl;
 use glam::Vec3;
 use std::ffi::c_void;
 use std::marker::PhantomData;
@@ -82,8 +81,8 @@ pub trait Services: Sync + Sized {
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, kind: u32, hit: &mut Hit) -> bool;
     /// Any hit of the root.
     fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray) -> bool;
-    /// Local geometry of a root hit.
-    fn local_geom(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &Hit, mask: u32) -> LocalGeom;
+    /// Local geometry of a root hit, into `out` (which starts as [`LocalGeom::EMPTY`]).
+    fn local_geom(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &Hit, mask: u32, out: &mut LocalGeom);
     /// Radiance of a ray leaving the scene.
     fn background(&self, ctx: &mut TraceCtx, ray: &Ray) -> Color;
     /// Number of lights.
@@ -160,15 +159,10 @@ impl SceneRecord<'_> {
     }
 }
 
-/// The host, for failure records of its own (a bug: the host never panics by design).
-struct HostDecl;
-impl Decl for HostDecl {
-    const CLASS: &'static str = "rtk (host)";
-    const DOC: &'static str = "";
-    const VERSION: &'static str = env!("CARGO_PKG_VERSION");
-}
-
-/// Call host code from a plugin's frame: a panic must not unwind into it.
+/// Call host code from a plugin's frame. Host code does not panic by
+/// design (it is pure dispatch; a panic there is a bug, and unwinding into a
+/// plugin's `extern "C"` frame aborts with Rust's message), so, unlike the
+/// SDK's shims, this adds no `catch_unwind` to the hottest calls.
 ///
 /// # Safety
 /// `host` must be the live `H` the record was bound to and `ctx` valid and
@@ -177,20 +171,13 @@ impl Decl for HostDecl {
 unsafe fn guard<H, R>(
     host: *const c_void,
     ctx: *mut TraceCtx,
-    entry: &str,
-    fallback: R,
+    _entry: &str,
+    _fallback: R,
     f: impl FnOnce(&H, &mut TraceCtx) -> R,
 ) -> R {
     // SAFETY: guaranteed by the caller.
     let (h, ctx) = unsafe { (&*(host as *const H), &mut *ctx) };
-    let r = {
-        let c = &mut *ctx;
-        catch_unwind(AssertUnwindSafe(move || f(h, c)))
-    };
-    r.unwrap_or_else(|_| {
-        ctx.record_failure(HostDecl::CLASS, &format!("panicked in {entry}"));
-        fallback
-    })
+    f(h, ctx)
 }
 
 unsafe extern "C" fn svc_trace<H: Services>(
@@ -242,7 +229,7 @@ unsafe extern "C" fn svc_local_geom<H: Services>(
     // SAFETY: as above; `out` is a valid output record.
     unsafe {
         guard::<H, _>(host, ctx, "local_geom", (), |h, c| {
-            *out = h.local_geom(c, &*ray, &*hit, mask)
+            h.local_geom(c, &*ray, &*hit, mask, &mut *out)
         })
     }
 }
@@ -262,8 +249,7 @@ unsafe extern "C" fn svc_background<H: Services>(
 
 unsafe extern "C" fn svc_light_count<H: Services>(host: *const c_void) -> u32 {
     // SAFETY: as above.
-    let h = unsafe { &*(host as *const H) };
-    catch_unwind(AssertUnwindSafe(|| h.light_count())).unwrap_or(0)
+    unsafe { &*(host as *const H) }.light_count()
 }
 
 unsafe extern "C" fn svc_sample_light<H: Services>(
@@ -290,12 +276,6 @@ unsafe extern "C" fn svc_material<H: Services>(
 ) -> bool {
     // SAFETY: as above; `out` is a valid output record.
     let h = unsafe { &*(host as *const H) };
-    match catch_unwind(AssertUnwindSafe(|| h.material(shader).map(Shader::raw))) {
-        Ok(Some(r)) => {
-            // SAFETY: as above.
-            unsafe { *out = r };
-            true
-        }
-        _ => false,
-    }
+    // SAFETY: as above.
+    unsafe { write_some(out, h.material(shader).map(Shader::raw)) }
 }

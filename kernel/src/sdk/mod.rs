@@ -225,6 +225,12 @@ pub trait FromTransform: Object {
 
 /// A shader: answers material queries for the integrator.
 pub trait Shader: Plugin {
+    /// The [`lobe`] kinds this material has (reflection, transmission,
+    /// diffuse, glossy, specular), asked once; integrators skip queries for
+    /// lobes it lacks. The default, every lobe, is always correct.
+    fn lobes(&self) -> u32 {
+        lobe::ALL
+    }
     /// BSDF value f(wo, wi), cosine not included; both directions are unit
     /// and point away from the surface.
     fn eval(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: glam::Vec3, wi: glam::Vec3) -> Color;

@@ -116,6 +116,12 @@ pub struct Material<'a> {
 }
 
 impl Material<'_> {
+    /// The [`lobe`] kinds the material has.
+    #[inline]
+    pub fn lobes(&self) -> u32 {
+        self.r.lobes
+    }
+
     /// BSDF value f(wo, wi), cosine not included.
     #[inline]
     pub fn eval(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {

@@ -29,6 +29,10 @@ impl Plugin for Flat {
 }
 
 impl Shader for Flat {
+    fn lobes(&self) -> u32 {
+        0
+    }
+
     /// As a material, it reflects nothing.
     fn eval(&self, _ctx: &mut TraceCtx, _g: &LocalGeom, _wo: glam::Vec3, _wi: glam::Vec3) -> Color {
         Color::BLACK

@@ -33,6 +33,10 @@ impl Plugin for Lambert {
 }
 
 impl Shader for Lambert {
+    fn lobes(&self) -> u32 {
+        lobe::DIFFUSE | lobe::REFLECTION
+    }
+
     fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
         // Reflection only: both directions on the same side of the surface.
         if same_side(g, wo, wi) {

@@ -85,34 +85,40 @@ impl Plugin for Phong {
     }
 }
 
-/// The delta lobes at a hit: the mirror direction with its weight
-/// `kr + kt·F`, and the refracted direction with `kt·(1 − F)` (none on total
-/// internal reflection), F being the dielectric Fresnel reflectance.
-struct DeltaLobes {
-    reflect: (Vec3, Color),
-    refract: Option<(Vec3, Color)>,
+/// The side a ray arrives from: the shading normal turned towards `wo`, and
+/// the relative index of refraction across the surface (n_t / n_i).
+struct Side {
+    n: Vec3,
+    eta: f32,
 }
 
 impl Phong {
-    fn delta_lobes(&self, g: &LocalGeom, wo: Vec3) -> DeltaLobes {
-        // Work on the side the ray arrives from.
+    fn side(&self, g: &LocalGeom, wo: Vec3) -> Side {
         let entering = g.ng.v().dot(wo) > 0.0;
-        let n = if g.ns.v().dot(wo) > 0.0 {
-            g.ns.v()
-        } else {
-            -g.ns.v()
-        };
-        let mut lobes = DeltaLobes {
-            reflect: (reflect(wo, n), self.kr),
-            refract: None,
-        };
-        if !self.kt.is_black() {
-            let eta = if entering { self.ior } else { 1.0 / self.ior };
-            let f = fresnel_dielectric(wo.dot(n), eta);
-            lobes.reflect.1 = lobes.reflect.1.plus(self.kt.scale(f));
-            lobes.refract = refract(wo, n, eta).map(|t| (t, self.kt.scale(1.0 - f)));
+        let ns = g.ns.v();
+        Side {
+            n: if ns.dot(wo) > 0.0 { ns } else { -ns },
+            eta: if entering { self.ior } else { 1.0 / self.ior },
         }
-        lobes
+    }
+
+    /// The mirror lobe: direction and weight `kr + kt·F`.
+    fn mirror_lobe(&self, s: &Side, wo: Vec3) -> (Vec3, Color) {
+        let mut w = self.kr;
+        if !self.kt.is_black() {
+            w = w.plus(self.kt.scale(fresnel_dielectric(wo.dot(s.n), s.eta)));
+        }
+        (reflect(wo, s.n), w)
+    }
+
+    /// The refraction lobe: direction and weight `kt·(1 − F)`; none on total
+    /// internal reflection or without transmission.
+    fn refraction_lobe(&self, s: &Side, wo: Vec3) -> Option<(Vec3, Color)> {
+        if self.kt.is_black() {
+            return None;
+        }
+        let f = fresnel_dielectric(wo.dot(s.n), s.eta);
+        refract(wo, s.n, s.eta).map(|t| (t, self.kt.scale(1.0 - f)))
     }
 }
 
@@ -126,6 +132,17 @@ fn delta(wi: Vec3, weight: Color, side: u32) -> Option<BsdfSample> {
 }
 
 impl Shader for Phong {
+    fn lobes(&self) -> u32 {
+        let mut l = lobe::DIFFUSE | lobe::GLOSSY | lobe::REFLECTION;
+        if !(self.kr.is_black() && self.kt.is_black()) {
+            l |= lobe::SPECULAR; // the mirror direction (kr, and kt·F)
+        }
+        if !self.kt.is_black() {
+            l |= lobe::TRANSMISSION;
+        }
+        l
+    }
+
     fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
         self.brdf(g, wo, wi)
     }
@@ -142,14 +159,15 @@ impl Shader for Phong {
         lobes: u32,
     ) -> Option<BsdfSample> {
         if lobes & lobe::SPECULAR != 0 && !(self.kr.is_black() && self.kt.is_black()) {
-            let d = self.delta_lobes(g, wo);
+            let side = self.side(g, wo);
             if lobes & lobe::TRANSMISSION != 0 {
-                if let Some((t, w)) = d.refract {
+                if let Some((t, w)) = self.refraction_lobe(&side, wo) {
                     return delta(t, w, lobe::TRANSMISSION);
                 }
             }
             if lobes & lobe::REFLECTION != 0 {
-                return delta(d.reflect.0, d.reflect.1, lobe::REFLECTION);
+                let (r, w) = self.mirror_lobe(&side, wo);
+                return delta(r, w, lobe::REFLECTION);
             }
             return None;
         }

@@ -70,6 +70,9 @@ impl Integrator for Whitted {
         let mut l = direct_light(ctx, scene, ray, &g, |ctx, wi| m.eval(ctx, &g, wo, wi));
         // ...plus the mirror and refraction rays of its delta lobes.
         for (lobes, kind) in SPECULAR_LOBES {
+            if m.lobes() & lobes != lobes {
+                continue;
+            }
             if let Some(s) = m.sample(ctx, &g, wo, [0.5, 0.5], lobes) {
                 let r = spawn_ray(&g, s.wi.v(), ray);
                 l = l.plus(s.weight.times(scene.trace(ctx, &r, kind)));
