@@ -56,13 +56,8 @@ fn read_ply(p: &Path) -> Vec<[[f32; 3]; 3]> {
 }
 
 fn rays(n: usize) -> Vec<Ray> {
-    let mut s = 1u64;
-    let mut u = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut s = RngState::seeded(1);
+    let mut u = || s.next_f32();
     (0..n)
         .map(|_| {
             let o = rtk_kernel::glam::Vec3::new(u() * 30.0 - 15.0, u() * 20.0 - 5.0, 25.0);

@@ -5,7 +5,7 @@ use crate::abi::*;
 use glam::Vec3;
 
 impl Float3 {
-    /// Construct.
+    /// From components (a `const fn`, unlike the glam conversion).
     #[inline]
     pub const fn new(x: f32, y: f32, z: f32) -> Self {
         Self { x, y, z }
@@ -51,7 +51,7 @@ impl From<[f32; 3]> for Float3 {
 impl Color {
     /// Black.
     pub const BLACK: Color = Color::new(0.0, 0.0, 0.0);
-    /// Construct.
+    /// From linear RGB components.
     #[inline]
     pub const fn new(r: f32, g: f32, b: f32) -> Self {
         Self { r, g, b }
@@ -76,12 +76,12 @@ impl Color {
     pub fn times(self, o: Color) -> Color {
         Color::new(self.r * o.r, self.g * o.g, self.b * o.b)
     }
-    /// Scale.
+    /// Every component times `s`.
     #[inline]
     pub fn scale(self, s: f32) -> Color {
         Color::new(self.r * s, self.g * s, self.b * s)
     }
-    /// Sum.
+    /// Componentwise sum (light from several paths adds).
     #[inline]
     pub fn plus(self, o: Color) -> Color {
         Color::new(self.r + o.r, self.g + o.g, self.b + o.b)
@@ -115,22 +115,9 @@ impl Bounds3 {
     /// Smallest box containing both.
     #[inline]
     pub fn union(self, o: Bounds3) -> Bounds3 {
-        // Written with comparisons rather than f32::min so that an empty box
-        // (infinities) behaves, and a NaN never poisons the result.
-        fn lo(a: f32, b: f32) -> f32 {
-            if b < a {
-                b
-            } else {
-                a
-            }
-        }
-        fn hi(a: f32, b: f32) -> f32 {
-            if b > a {
-                b
-            } else {
-                a
-            }
-        }
+        // Comparisons rather than f32::min, so that an empty box
+        // (infinities) behaves and a NaN never poisons the result.
+        use crate::geom::{max_of as hi, min_of as lo};
         Bounds3 {
             min: Float3::new(
                 lo(self.min.x, o.min.x),

@@ -33,7 +33,7 @@ pub enum ErrorKind {
 /// The scene file an error is located in: its path and text.
 #[derive(Debug, Clone)]
 pub struct FileText {
-    /// Path as given.
+    /// Path as given on the command line (messages show it unchanged).
     pub path: PathBuf,
     /// The text the spans index.
     pub src: Arc<str>,

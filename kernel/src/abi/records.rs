@@ -267,7 +267,7 @@ pub struct ShaderModule {
         env: *const CreateEnv,
         sink: ErrSink,
     ) -> *mut c_void,
-    /// Destroy.
+    /// Destroy an object made by `create`.
     pub destroy: unsafe extern "C" fn(this: *mut c_void),
     /// The [`lobe`] kinds this shader has (called once, after `create`).
     pub lobes: unsafe extern "C" fn(this: *const c_void, out: *mut u32, sink: ErrSink) -> i32,
@@ -318,7 +318,7 @@ pub struct IntegratorModule {
         env: *const CreateEnv,
         sink: ErrSink,
     ) -> *mut c_void,
-    /// Destroy.
+    /// Destroy an object made by `create`.
     pub destroy: unsafe extern "C" fn(this: *mut c_void),
     /// Radiance arriving along `-ray.dir` at `ray.origin`.
     #[sabi(last_prefix_field)]
@@ -346,7 +346,7 @@ pub struct CameraModule {
         env: *const CreateEnv,
         sink: ErrSink,
     ) -> *mut c_void,
-    /// Destroy.
+    /// Destroy an object made by `create`.
     pub destroy: unsafe extern "C" fn(this: *mut c_void),
     /// Write a world-space ray (unit direction) and return the sample's weight.
     #[sabi(last_prefix_field)]
@@ -372,7 +372,7 @@ pub struct LightModule {
         env: *const CreateEnv,
         sink: ErrSink,
     ) -> *mut c_void,
-    /// Destroy.
+    /// Destroy an object made by `create`.
     pub destroy: unsafe extern "C" fn(this: *mut c_void),
     /// Sample the light seen from `p` at `time`; false when it contributes nothing.
     #[sabi(last_prefix_field)]

@@ -28,11 +28,11 @@ pub struct Float3 {
 #[repr(C)]
 #[derive(StableAbi, Clone, Copy, Debug, Default, PartialEq)]
 pub struct Color {
-    /// Red.
+    /// Red, linear (not sRGB-encoded).
     pub r: f32,
-    /// Green.
+    /// Green, linear.
     pub g: f32,
-    /// Blue.
+    /// Blue, linear.
     pub b: f32,
 }
 

@@ -65,16 +65,13 @@ mod tests {
         triangle_point_and_error,
     };
 
-    fn lcg(s: &mut u64) -> f32 {
-        *s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (*s >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    fn hemisphere(s: &mut u64, n: Vec3) -> Vec3 {
+    fn hemisphere(s: &mut crate::RngState, n: Vec3) -> Vec3 {
         loop {
-            let v = Vec3::new(lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0, lcg(s) * 2.0 - 1.0);
+            let v = Vec3::new(
+                s.next_f32() * 2.0 - 1.0,
+                s.next_f32() * 2.0 - 1.0,
+                s.next_f32() * 2.0 - 1.0,
+            );
             let l = v.length_squared();
             if l > 1e-4 && l <= 1.0 {
                 let v = v / l.sqrt();
@@ -97,7 +94,7 @@ mod tests {
     /// the incoming ray came from, never re-hit the triangle, at every scale.
     #[test]
     fn no_self_hits_off_triangles() {
-        let mut s = 21u64;
+        let mut s = crate::RngState::seeded(21);
         for &(mag, size) in &[
             (1.0f32, 1.0f32),
             (1e3, 1.0),
@@ -107,11 +104,12 @@ mod tests {
         ] {
             let mut rehits = 0;
             for _ in 0..2000 {
-                let c = Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5)
+                let c = Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5)
                     .normalize()
                     * mag;
                 let v: [[f32; 3]; 3] = std::array::from_fn(|_| {
-                    (c + Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5) * size)
+                    (c + Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5)
+                        * size)
                         .to_array()
                 });
                 let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
@@ -150,7 +148,7 @@ mod tests {
     /// the far side (never the near surface at t ~ 0).
     #[test]
     fn no_self_hits_off_spheres() {
-        let mut s = 5u64;
+        let mut s = crate::RngState::seeded(5);
         for &(mag, r) in &[
             (0.0f32, 1.0f32),
             (1e3, 1.0),
@@ -161,9 +159,9 @@ mod tests {
             let c = Vec3::new(0.6, -0.8, 0.0) * mag;
             let (mut rehits, mut misses) = (0, 0);
             for _ in 0..2000 {
-                let o = c + Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, 2.0) * r * 3.0;
-                let d =
-                    (c + Vec3::new(lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, 0.0) * r - o).normalize();
+                let o = c + Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, 2.0) * r * 3.0;
+                let d = (c + Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, 0.0) * r - o)
+                    .normalize();
                 let Some(h) = intersect_sphere(c.to_array(), r, o.to_array(), d.to_array()) else {
                     continue;
                 };

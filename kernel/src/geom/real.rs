@@ -77,3 +77,25 @@ pub fn gamma<R: Real>(n: u32) -> R {
     let ne = R::from_f64(n as f64) * R::UNIT_ROUNDOFF;
     ne / (R::ONE - ne)
 }
+
+/// The larger of `a` and `b`, by comparison: a NaN `b` never replaces `a`
+/// (and an empty box's infinities behave), unlike a `max` that returns the
+/// other operand for NaN. The one max helper of the kernel.
+#[inline]
+pub fn max_of<R: PartialOrd>(a: R, b: R) -> R {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
+/// The smaller of `a` and `b`, by comparison (see [`max_of`]).
+#[inline]
+pub fn min_of<R: PartialOrd>(a: R, b: R) -> R {
+    if b < a {
+        b
+    } else {
+        a
+    }
+}

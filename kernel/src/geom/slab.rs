@@ -117,13 +117,8 @@ mod tests {
 
     #[test]
     fn f32_and_f64_agree_on_random_rays() {
-        let mut s = 9u64;
-        let mut u = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut s = crate::RngState::seeded(9);
+        let mut u = || s.next_f64();
         let (mut n, mut hits) = (0, 0);
         for _ in 0..20_000 {
             let o: [f32; 3] = std::array::from_fn(|_| (u() * 6.0 - 3.0) as f32);

@@ -3,7 +3,7 @@
 //! `r² − |f − (f·d)d/|d|²|²` and the stable root `q`, which stays accurate when
 //! the sphere is far away or tiny compared with the distance (docs/numerics.md Q1, Q2).
 
-use super::{gamma, Real};
+use super::{gamma, max_of, Real};
 
 /// Both roots of a ray/sphere intersection, in ascending order.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,7 +55,7 @@ pub fn intersect_sphere<R: Real>(c: [R; 3], r: R, o: [R; 3], d: [R; 3]) -> Optio
     }
     // Each root carries a few roundings relative to the larger one's scale;
     // |f|/|d| bounds the distance scale of the problem.
-    let scale = t0.abs().max_r(t1.abs()).max_r((dot(f, f) / a).sqrt());
+    let scale = max_of(max_of(t0.abs(), t1.abs()), (dot(f, f) / a).sqrt());
     let t_err = gamma::<R>(7) * scale;
     Some(SphereHit { t0, t1, t_err })
 }
@@ -98,30 +98,9 @@ pub fn sphere_point_and_error<R: Real>(
     (p, err)
 }
 
-trait MaxR {
-    fn max_r(self, o: Self) -> Self;
-}
-impl<R: Real> MaxR for R {
-    #[inline]
-    fn max_r(self, o: Self) -> Self {
-        if o > self {
-            o
-        } else {
-            self
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn rng(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64) / ((1u64 << 53) as f64)
-    }
 
     #[test]
     fn unit_sphere_head_on() {
@@ -144,13 +123,13 @@ mod tests {
     /// against the f64 evaluation of the same formula on the same f32 inputs.
     #[test]
     fn far_sphere_classification_matches_f64() {
-        let mut seed = 7u64;
+        let mut seed = crate::RngState::seeded(7);
         let dist = 1e4f32;
         let c = [dist * 0.6, dist * 0.0, dist * 0.8];
         let mut mismatch = 0;
         let n = 20_000;
         for _ in 0..n {
-            let (a, b) = (rng(&mut seed) * 2.0 - 1.0, rng(&mut seed) * 2.0 - 1.0);
+            let (a, b) = (seed.next_f64() * 2.0 - 1.0, seed.next_f64() * 2.0 - 1.0);
             let target = [c[0] + 1.5 * a as f32, c[1] + 1.5 * b as f32, c[2]];
             let len =
                 (target[0] * target[0] + target[1] * target[1] + target[2] * target[2]).sqrt();
@@ -171,13 +150,13 @@ mod tests {
 
     #[test]
     fn reprojected_point_is_within_its_error_bound_of_f64() {
-        let mut seed = 3u64;
+        let mut seed = crate::RngState::seeded(3);
         for _ in 0..10_000 {
             let c = [1e3f32, -2e3, 5e2];
             let o = [0.0f32, 0.0, 0.0];
             let t = [
-                c[0] + (rng(&mut seed) as f32 - 0.5),
-                c[1] + (rng(&mut seed) as f32 - 0.5),
+                c[0] + (seed.next_f64() as f32 - 0.5),
+                c[1] + (seed.next_f64() as f32 - 0.5),
                 c[2],
             ];
             let l = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();

@@ -215,13 +215,6 @@ pub fn triangle_point_and_error(p: [[f32; 3]; 3], b: [f32; 3]) -> ([f32; 3], [f3
 mod tests {
     use super::*;
 
-    fn lcg(s: &mut u64) -> f64 {
-        *s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (*s >> 11) as f64 / (1u64 << 53) as f64
-    }
-
     #[test]
     fn simple_hit_and_barycentrics() {
         let p = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
@@ -241,12 +234,12 @@ mod tests {
     #[test]
     fn origin_in_plane_never_self_hits() {
         let p = [[-6.0, 0.0, -6.0], [-6.0, 0.0, 6.0], [6.0, 0.0, 6.0]];
-        let mut s = 3u64;
+        let mut s = crate::RngState::seeded(3);
         for _ in 0..100_000 {
             let o = [
-                (lcg(&mut s) * 8.0 - 6.0) as f32,
+                (s.next_f64() * 8.0 - 6.0) as f32,
                 0.0,
-                (lcg(&mut s) * 8.0 - 2.0) as f32,
+                (s.next_f64() * 8.0 - 2.0) as f32,
             ];
             let target = [4.0f32, 6.0, 4.0];
             let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
@@ -266,7 +259,7 @@ mod tests {
     /// scales and offsets: none may pass between the two triangles.
     #[test]
     fn shared_edge_is_watertight() {
-        let mut s = 11u64;
+        let mut s = crate::RngState::seeded(11);
         for &(scale, off) in &[(1e-3f64, 0.0f64), (1.0, 0.0), (1e3, 1e3), (1.0, 1e5)] {
             let q = |x: f64, y: f64| {
                 [
@@ -279,14 +272,14 @@ mod tests {
             let (ta, tb) = ([v0, v1, v2], [v0, v2, v3]);
             let mut leaks = 0;
             for _ in 0..20_000 {
-                let u = lcg(&mut s);
+                let u = s.next_f64();
                 let target: Vec<f64> = (0..3)
                     .map(|i| v0[i] as f64 + u * (v2[i] as f64 - v0[i] as f64))
                     .collect();
-                let h = 0.5 + 2.5 * lcg(&mut s);
+                let h = 0.5 + 2.5 * s.next_f64();
                 let o = [
-                    (target[0] + (lcg(&mut s) - 0.5) * scale) as f32,
-                    (target[1] + (lcg(&mut s) - 0.5) * scale) as f32,
+                    (target[0] + (s.next_f64() - 0.5) * scale) as f32,
+                    (target[1] + (s.next_f64() - 0.5) * scale) as f32,
                     (target[2] + h * scale) as f32,
                 ];
                 let d64: Vec<f64> = (0..3).map(|i| target[i] - o[i] as f64).collect();
@@ -314,17 +307,17 @@ mod tests {
     #[test]
     fn closed_mesh_has_no_leaks() {
         let (nt, np) = (16usize, 16usize);
-        let mut s = 17u64;
+        let mut s = crate::RngState::seeded(17);
         for &c in &[0.0f64, 1e3, 1e5] {
             let mut verts: Vec<[f64; 3]> = vec![
-                [0.0, 0.0, 1.0 + 5.0 * lcg(&mut s)],
-                [0.0, 0.0, -(1.0 + 5.0 * lcg(&mut s))],
+                [0.0, 0.0, 1.0 + 5.0 * s.next_f64()],
+                [0.0, 0.0, -(1.0 + 5.0 * s.next_f64())],
             ];
             for i in 1..nt {
                 let th = std::f64::consts::PI * i as f64 / nt as f64;
                 for j in 0..np {
                     let ph = std::f64::consts::TAU * j as f64 / np as f64;
-                    let r = 1.0 + 5.0 * lcg(&mut s);
+                    let r = 1.0 + 5.0 * s.next_f64();
                     verts.push([
                         r * th.sin() * ph.cos(),
                         r * th.sin() * ph.sin(),
@@ -355,7 +348,7 @@ mod tests {
             let mut leaks = 0;
             for k in 0..40_000 {
                 let o64 = loop {
-                    let p = [lcg(&mut s) - 0.5, lcg(&mut s) - 0.5, lcg(&mut s) - 0.5];
+                    let p = [s.next_f64() - 0.5, s.next_f64() - 0.5, s.next_f64() - 0.5];
                     if p.iter().map(|x| x * x).sum::<f64>() < 0.25 {
                         break p;
                     }
@@ -366,13 +359,13 @@ mod tests {
                     (o64[2] - c * 0.25) as f32,
                 ];
                 let target: [f64; 3] = if k % 2 == 0 {
-                    let v = v32[(lcg(&mut s) * v32.len() as f64) as usize % v32.len()];
+                    let v = v32[(s.next_f64() * v32.len() as f64) as usize % v32.len()];
                     [v[0] as f64, v[1] as f64, v[2] as f64]
                 } else {
                     [
-                        o[0] as f64 + lcg(&mut s) - 0.5,
-                        o[1] as f64 + lcg(&mut s) - 0.5,
-                        o[2] as f64 + lcg(&mut s) - 0.5,
+                        o[0] as f64 + s.next_f64() - 0.5,
+                        o[1] as f64 + s.next_f64() - 0.5,
+                        o[2] as f64 + s.next_f64() - 0.5,
                     ]
                 };
                 let d64 = [
@@ -410,13 +403,13 @@ mod tests {
 
     #[test]
     fn point_error_bounds_hold_against_f64() {
-        let mut s = 5u64;
+        let mut s = crate::RngState::seeded(5);
         for _ in 0..10_000 {
             let c = 1e3;
             let p: [[f32; 3]; 3] =
-                std::array::from_fn(|_| std::array::from_fn(|_| (c + lcg(&mut s) * 10.0) as f32));
-            let b0 = lcg(&mut s) as f32 * 0.5;
-            let b1 = lcg(&mut s) as f32 * 0.5;
+                std::array::from_fn(|_| std::array::from_fn(|_| (c + s.next_f64() * 10.0) as f32));
+            let b0 = s.next_f64() as f32 * 0.5;
+            let b1 = s.next_f64() as f32 * 0.5;
             let b = [1.0 - b0 - b1, b0, b1];
             let (q, e) = triangle_point_and_error(p, b);
             for i in 0..3 {

@@ -98,7 +98,11 @@ fn build_world(
         host,
     );
     let t1 = Instant::now();
-    let (camera, integrator, lights) = create_others(&b, &desc)?;
+    let Others {
+        camera,
+        integrator,
+        lights,
+    } = create_others(&b, &desc)?;
     b.create_time += t1.elapsed();
     let root_inst = &desc.render.root;
     let root = b.instance(root_inst)?;
@@ -141,8 +145,15 @@ fn build_world(
     })
 }
 
+/// What a scene has besides objects and shaders.
+struct Others {
+    camera: Camera,
+    integrator: Integrator,
+    lights: Vec<Light>,
+}
+
 /// The camera, the integrator and the lights.
-fn create_others(b: &Builder, desc: &Desc) -> Result<(Camera, Integrator, Vec<Light>), SceneError> {
+fn create_others(b: &Builder, desc: &Desc) -> Result<Others, SceneError> {
     let camera = create_def(b, &desc.cameras[&desc.render.camera], |m, p, a| match m {
         Module::Camera(c) => Some(Camera::create(c, p, a)),
         _ => None,
@@ -161,7 +172,11 @@ fn create_others(b: &Builder, desc: &Desc) -> Result<(Camera, Integrator, Vec<Li
             })
         })
         .collect::<Result<Vec<_>, _>>()?;
-    Ok((camera, integrator, lights))
+    Ok(Others {
+        camera,
+        integrator,
+        lights,
+    })
 }
 
 /// Create a camera, integrator or light from its definition; `make` picks

@@ -76,7 +76,7 @@ impl Render {
                 format!("{width}x{height} is more than rtk's limit of {MAX_PIXELS} pixels; render it in crops"),
             ));
         }
-        let (camera, camera_origin) = camera(r, cameras)?;
+        let camera = camera(r, cameras)?;
         let Some(rn) = r.get("root") else {
             return Err(SceneError::invalid(
                 &r.origin,
@@ -90,8 +90,8 @@ impl Render {
             height,
             spp: int("spp", 1, 1, 1 << 24)? as u32,
             seed: int("seed", 0, 0, i64::MAX)? as u64,
-            camera,
-            camera_origin,
+            camera: camera.name,
+            camera_origin: camera.origin,
             root: Instance::read(rn, "render.root")?,
             integrator: integrator(r)?,
             background: background(r)?,
@@ -103,16 +103,25 @@ impl Render {
     }
 }
 
+/// The camera a render uses, and where the choice was made.
+struct CameraChoice {
+    name: String,
+    origin: Origin,
+}
+
 /// The camera named, or the only one defined.
-fn camera(r: &Node, cameras: &BTreeMap<String, Def>) -> Result<(String, Origin), SceneError> {
+fn camera(r: &Node, cameras: &BTreeMap<String, Def>) -> Result<CameraChoice, SceneError> {
     if let Some(n) = r.get("camera") {
-        return Ok((string(n, OBJ, "camera")?, n.origin.clone()));
+        return Ok(CameraChoice {
+            name: string(n, OBJ, "camera")?,
+            origin: n.origin.clone(),
+        });
     }
     match cameras.len() {
-        1 => Ok((
-            cameras.keys().next().cloned().unwrap_or_default(),
-            r.origin.clone(),
-        )),
+        1 => Ok(CameraChoice {
+            name: cameras.keys().next().cloned().unwrap_or_default(),
+            origin: r.origin.clone(),
+        }),
         0 => Err(SceneError::invalid(
             &r.origin,
             OBJ,

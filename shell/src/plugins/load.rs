@@ -16,15 +16,15 @@ pub enum LoadError {
     /// The OS could not load it.
     #[error("cannot load {path}: {msg}")]
     Open {
-        /// The file.
+        /// The library file.
         path: PathBuf,
-        /// The loader's message.
+        /// The OS loader's reason (missing file, wrong architecture, undefined symbol...).
         msg: String,
     },
     /// No rtk header symbol.
     #[error("{path} is not an rtk plugin (it exports no RTK_PLUGIN_HEADER)")]
     NotAPlugin {
-        /// The file.
+        /// The library file.
         path: PathBuf,
     },
     /// Built against another kernel ABI or version.
@@ -33,9 +33,9 @@ pub enum LoadError {
          this rtk uses rtk-kernel {host_kernel} (ABI {host_abi}). Rebuild the plugin against rtk-kernel {host_kernel}."
     )]
     Version {
-        /// The class.
+        /// The class it declares.
         class: String,
-        /// The file.
+        /// The library file.
         path: PathBuf,
         /// Kernel version the plugin saw.
         plugin_kernel: String,
@@ -52,15 +52,15 @@ pub enum LoadError {
          Rebuild it with panic = \"unwind\" (the default)."
     )]
     PanicAbort {
-        /// The class.
+        /// The class it declares.
         class: String,
-        /// The file.
+        /// The library file.
         path: PathBuf,
     },
     /// The header says another class than the file name.
     #[error("{path} declares class '{declared}', but its file name says '{expected}'")]
     ClassMismatch {
-        /// The file.
+        /// The library file.
         path: PathBuf,
         /// From the file name.
         expected: String,
@@ -73,9 +73,9 @@ pub enum LoadError {
          Rebuild the plugin against rtk-kernel {host_kernel}."
     )]
     Layout {
-        /// The class.
+        /// The class it declares.
         class: String,
-        /// The file.
+        /// The library file.
         path: PathBuf,
         /// The first lines of abi_stable's report.
         summary: String,
@@ -85,7 +85,7 @@ pub enum LoadError {
     /// The header is malformed.
     #[error("{path}: {msg}")]
     BadHeader {
-        /// The file.
+        /// The library file.
         path: PathBuf,
         /// What is wrong.
         msg: String,

@@ -33,17 +33,17 @@ pub enum Module {
 
 /// A loaded plugin.
 pub struct Plugin {
-    /// Class name.
+    /// Class name (as its header declares and its file name promises).
     pub class: String,
-    /// Library file.
+    /// The library it was loaded from (the first match on the plugin path).
     pub path: PathBuf,
-    /// Kind.
+    /// What kind of plugin: it must match the scene's use of the class.
     pub kind: PluginKind,
-    /// Plugin crate version.
+    /// The plugin crate's own version (not the kernel's).
     pub version: String,
-    /// Documentation.
+    /// Its README: parameter table and a TOML example (`rtk plugins` prints it).
     pub doc: String,
-    /// Root module.
+    /// The checked root module, by kind.
     pub module: Module,
 }
 
