@@ -2,7 +2,9 @@
 //! cameras and lights.
 
 mod output;
+mod rays;
 mod render;
+mod trace;
 mod tracer;
 
 use anyhow::{bail, Context, Result};
@@ -27,6 +29,9 @@ struct Cli {
 enum Command {
     /// Render a scene to PNG (sRGB) or EXR (linear).
     Render(RenderArgs),
+    /// Cast rays (a ray file, or the Embree anchor's sets) against a scene or
+    /// a mesh under any aggregate: throughput, build time, memory, checksums.
+    Trace(trace::TraceArgs),
     /// List every plugin on the plugin path with its kind and parameters.
     Plugins {
         /// Extra folders to search first (repeatable).
@@ -71,6 +76,7 @@ fn main() {
     let cli = Cli::parse();
     let res = match cli.command {
         Command::Render(a) => cmd_render(a, start),
+        Command::Trace(a) => cmd_trace(a),
         Command::Plugins { plugin_path, short } => cmd_plugins(&plugin_path, short),
     };
     if let Err(e) = res {
@@ -91,10 +97,10 @@ impl Parallel for Pool<'_> {
     }
 }
 
-fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
-    let threads = a
-        .threads
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+/// The rendering pool: `threads` threads (default: all cores).
+fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
+    let threads =
+        threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if threads == 0 {
         bail!("--threads must be at least 1");
     }
@@ -106,6 +112,16 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
         .stack_size(64 << 20)
         .build()
         .context("starting the thread pool")?;
+    Ok((pool, threads))
+}
+
+fn cmd_trace(a: trace::TraceArgs) -> Result<()> {
+    let (pool, _) = pool(a.threads)?;
+    trace::run(a, &pool, &Pool(&pool))
+}
+
+fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
+    let (pool, threads) = pool(a.threads)?;
     let mut sets = a.set.clone();
     if let Some(spp) = a.spp {
         sets.push(format!("render.spp={spp}"));

@@ -7,5 +7,10 @@
 /// matrix as typed data.
 pub const INSTANCE_TRANSFORM: &str = "transform";
 
+/// The aggregate the shell builds over an object that offers the
+/// primitive-set protocol (a mesh) where no aggregate flattens it, unless
+/// the object's `accel` key names another class (or `"none"`).
+pub const DEFAULT_ACCEL: &str = "bvh";
+
 /// The integrator a scene gets when `[render]` names none.
 pub const DEFAULT_INTEGRATOR: &str = "whitted";

@@ -16,6 +16,8 @@
 //!   sphere, conservative slab test, error-bound ray offsets), generic over
 //!   f32 and f64 so the f64 reference and the stress tests share one
 //!   implementation.
+//! - [`accel`]: what aggregates share: children flattened into primitives
+//!   with the list's exact answer, the codebase's one BVH, mailboxes.
 //! - [`xform`]: affine transforms composed in f64 and checked.
 //! - [`classes`]: the class names the shell itself must name.
 //!
@@ -26,6 +28,7 @@
 #![deny(clippy::missing_safety_doc)]
 
 pub mod abi;
+pub mod accel;
 pub mod classes;
 pub mod geom;
 pub mod host;
@@ -41,8 +44,9 @@ pub use abi::{RngState, Stats, TraceCtx};
 pub use glam;
 pub use sdk::params::{self, parse_params};
 pub use sdk::{
-    Camera, Child, Env, FromTransform, Integrator, Light, Material, Object, Plugin, PluginError,
-    Prepare, PrimSet, PrimitiveSet, Scene, Shade, Shader,
+    Camera, Child, Env, FlattensPrimitives, FromTransform, Integrator, Light, Material, Object,
+    Plugin, PluginError, Prepare, PrimSet, PrimitiveSet, Scene, Shade, Shader, TriangleSlices,
+    Triangles,
 };
 pub use serde;
 

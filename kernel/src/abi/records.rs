@@ -231,6 +231,43 @@ pub struct ObjectModule {
             level: u32,
         ) -> bool,
     >,
+    // ---- Appended after the ABI 2 prefix: absent (read as None / false)
+    // ---- in plugins built before they existed.
+    /// Triangles as data: lend the object's vertex positions and index
+    /// triples ([`TriangleData`]), so an aggregate intersects them inline with
+    /// the kernel's watertight routine in its own layout (issue 7).
+    #[sabi(missing_field(default))]
+    pub triangles: Option<
+        unsafe extern "C" fn(this: *const c_void, out: *mut TriangleData, sink: ErrSink) -> i32,
+    >,
+    /// The class builds its own structure over its children's primitives
+    /// (`bvh`, `grid`...): the shell then adds a primitive set to it as is,
+    /// rather than wrapped in the set's own acceleration structure.
+    #[sabi(missing_field(default))]
+    pub flattens_primitives: bool,
+}
+
+/// A triangle mesh's data, lent by the object that owns it through the
+/// `triangles` entry: valid and unchanged for the object's lifetime.
+///
+/// Triangle `i` (the primitive id) has the vertices
+/// `positions[indices[i][k]]`. An aggregate that intersects them itself
+/// writes, for a hit on triangle `i` of the child at its slot `c`:
+/// `stack[level] = { index: c }` and `stack[level + 1] = { prim: i, uv: [b1, b2] }`
+/// (the barycentric weights of vertices 1 and 2), with `depth = level + 2`,
+/// exactly what the child's own `intersect` would record, so the child's
+/// `local_geom` at `level + 1` serves the hit.
+#[repr(C)]
+#[derive(StableAbi, Clone, Copy)]
+pub struct TriangleData {
+    /// Vertex positions.
+    pub positions: *const [f32; 3],
+    /// Number of positions.
+    pub vertex_count: u32,
+    /// Vertex indices of each triangle.
+    pub indices: *const [u32; 3],
+    /// Number of triangles (the primitive count).
+    pub triangle_count: u32,
 }
 
 // --------------------------------------------------------------------------

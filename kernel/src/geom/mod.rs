@@ -16,4 +16,7 @@ pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to, SHADOW_EPSILON};
 pub use real::{gamma, max_of, min_of, Real};
 pub use slab::{slab, RayBoxPrecomp, SlabHit};
 pub use sphere::{intersect_sphere, nearest_root, sphere_point_and_error, SphereHit};
-pub use triangle::{intersect_triangle, intersect_triangle_f64, triangle_point_and_error, TriHit};
+pub use triangle::{
+    intersect_triangle, intersect_triangle_f64, intersect_triangle_sheared, is_degenerate,
+    triangle_point_and_error, RayShear, TriHit,
+};

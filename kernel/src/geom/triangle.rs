@@ -50,6 +50,58 @@ enum Core<R> {
     Undecided,
 }
 
+/// What the test computes from the ray alone: the axis permutation that
+/// makes the direction's largest component z, and the shear that maps the
+/// direction to +z. Computed once per ray ([`RayShear::new`]) when many
+/// triangles are tested against one ray; the per-triangle work is the same
+/// arithmetic on the same values, so the results are bit-identical.
+#[derive(Clone, Copy, Debug)]
+pub struct RayShear<R> {
+    o: [R; 3],
+    k: [usize; 3],
+    s: [R; 3],
+    /// The permuted direction's z is zero (a zero direction): nothing is hit.
+    flat: bool,
+}
+
+impl<R: Real> RayShear<R> {
+    /// The shear of the ray `o + t·d`.
+    #[inline]
+    pub fn new(o: [R; 3], d: [R; 3]) -> Self {
+        // Permute so that the ray's largest direction component is z.
+        let ad = [d[0].abs(), d[1].abs(), d[2].abs()];
+        let kz = if ad[0] > ad[1] {
+            if ad[0] > ad[2] {
+                0
+            } else {
+                2
+            }
+        } else if ad[1] > ad[2] {
+            1
+        } else {
+            2
+        };
+        let kx = if kz == 2 { 0 } else { kz + 1 };
+        let ky = if kx == 2 { 0 } else { kx + 1 };
+        let dp = [d[kx], d[ky], d[kz]];
+        let flat = dp[2] == R::ZERO;
+        RayShear {
+            o,
+            k: [kx, ky, kz],
+            s: [-dp[0] / dp[2], -dp[1] / dp[2], R::ONE / dp[2]],
+            flat,
+        }
+    }
+}
+
+/// Is the triangle degenerate (zero area in this precision)? Such triangles
+/// are never hit (T3); an aggregate may leave them out of its structure.
+#[inline]
+pub fn is_degenerate<R: Real>(p: &[[R; 3]; 3]) -> bool {
+    let n = cross(sub(p[2], p[0]), sub(p[1], p[0]));
+    !(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > R::ZERO)
+}
+
 #[inline]
 fn core<R: Real>(
     o: [R; 3],
@@ -58,45 +110,37 @@ fn core<R: Real>(
     t_max: R,
     exact_zero_is_undecided: bool,
 ) -> Core<R> {
-    // Degenerate triangles are never hit (T3).
-    let n = cross(sub(p[2], p[0]), sub(p[1], p[0]));
-    if !(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > R::ZERO) {
+    if is_degenerate(&p) {
         return Core::Miss;
     }
+    core_sheared(&RayShear::new(o, d), p, t_max, exact_zero_is_undecided)
+}
+
+/// The per-triangle part of the test, for a non-degenerate triangle.
+#[inline]
+fn core_sheared<R: Real>(
+    r: &RayShear<R>,
+    p: [[R; 3]; 3],
+    t_max: R,
+    exact_zero_is_undecided: bool,
+) -> Core<R> {
+    let o = r.o;
+    let [kx, ky, kz] = r.k;
     let mut t = [sub(p[0], o), sub(p[1], o), sub(p[2], o)];
-    // Permute so that the ray's largest direction component is z.
-    let ad = [d[0].abs(), d[1].abs(), d[2].abs()];
-    let kz = if ad[0] > ad[1] {
-        if ad[0] > ad[2] {
-            0
-        } else {
-            2
-        }
-    } else if ad[1] > ad[2] {
-        1
-    } else {
-        2
-    };
-    let kx = if kz == 2 { 0 } else { kz + 1 };
-    let ky = if kx == 2 { 0 } else { kx + 1 };
-    let dp = [d[kx], d[ky], d[kz]];
     for v in t.iter_mut() {
         *v = [v[kx], v[ky], v[kz]];
     }
-    if dp[2] == R::ZERO {
+    if r.flat {
         return Core::Miss;
     }
-    let sx = -dp[0] / dp[2];
-    let sy = -dp[1] / dp[2];
-    let sz = R::ONE / dp[2];
+    let [sx, sy, sz] = r.s;
     for v in t.iter_mut() {
         v[0] = v[0] + sx * v[2];
         v[1] = v[1] + sy * v[2];
-    }
-    // Plain products, not FMA-based differences: without a target FMA,
-    // `mul_add` is a library call (~2x slower here, BENCHMARKS.md). They stay
-    // watertight: a shared edge's function is computed from the same operands
-    // in both triangles and comes out exactly negated; an exact zero goes to f64.
+    } // Plain products, not FMA-based differences: without a target FMA,
+      // `mul_add` is a library call (~2x slower here, BENCHMARKS.md). They stay
+      // watertight: a shared edge's function is computed from the same operands
+      // in both triangles and comes out exactly negated; an exact zero goes to f64.
     let e0 = t[1][0] * t[2][1] - t[1][1] * t[2][0];
     let e1 = t[2][0] * t[0][1] - t[2][1] * t[0][0];
     let e2 = t[0][0] * t[1][1] - t[0][1] * t[1][0];
@@ -167,6 +211,24 @@ pub fn intersect_triangle(
     t_min: f32,
     t_max: f32,
 ) -> Option<TriHit<f32>> {
+    if is_degenerate(&p) {
+        return None;
+    }
+    intersect_triangle_sheared(&RayShear::new(o, d), d, p, t_min, t_max)
+}
+
+/// [`intersect_triangle`] with the ray's shear computed once for many
+/// triangles (`d` is the ray's direction, for the f64 recheck). The triangle
+/// must not be degenerate ([`is_degenerate`]): those are never hit.
+#[inline]
+pub fn intersect_triangle_sheared(
+    r: &RayShear<f32>,
+    d: [f32; 3],
+    p: [[f32; 3]; 3],
+    t_min: f32,
+    t_max: f32,
+) -> Option<TriHit<f32>> {
+    let o = r.o;
     // The f64 recheck applies its own (much smaller) error bound: a hit from
     // an origin lying exactly in the triangle's plane has t = 0 up to
     // rounding in f64 too, and must not count.
@@ -183,7 +245,7 @@ pub fn intersect_triangle(
             _ => None,
         }
     };
-    match core(o, d, p, t_max, true) {
+    match core_sheared(r, p, t_max, true) {
         Core::Miss => None,
         Core::Undecided => recheck(),
         Core::Hit(h, dt) => {

@@ -2,7 +2,7 @@
 //! safe methods only. A plugin cannot make one (the SDK's `add_child` shim
 //! does), so it can never hold a raw record or a pointer it could misuse.
 
-use super::PluginError;
+use super::{PluginError, TriangleSlices};
 use crate::abi::*;
 use crate::host::Collected;
 
@@ -21,6 +21,19 @@ pub struct Child {
 unsafe impl Send for Child {}
 // SAFETY: see above.
 unsafe impl Sync for Child {}
+
+/// A slice from a pointer and a count (empty for a null pointer).
+///
+/// # Safety
+/// A non-null `p` must point at `n` initialised values valid for `'a`.
+unsafe fn slice_or_empty<'a, T>(p: *const T, n: u32) -> &'a [T] {
+    if p.is_null() || n == 0 {
+        &[]
+    } else {
+        // SAFETY: guaranteed by the caller.
+        unsafe { std::slice::from_raw_parts(p, n as usize) }
+    }
+}
 
 impl std::fmt::Debug for Child {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -133,6 +146,30 @@ impl PrimSet {
     /// The child whose primitives these are.
     pub fn child(&self) -> &Child {
         &self.child
+    }
+
+    /// The child's triangles as data, when its class lends them (checked:
+    /// every index is within the positions).
+    pub fn triangles(&self) -> Result<Option<TriangleSlices<'_>>, PluginError> {
+        let Some(f) = self.child.obj.class.triangles() else {
+            return Ok(None);
+        };
+        let mut d = std::mem::MaybeUninit::<TriangleData>::uninit();
+        // SAFETY: the child's object is live; `d` is written on success.
+        self.child.cold("triangles", |this, sink| unsafe {
+            f(this, d.as_mut_ptr(), sink)
+        })?;
+        // SAFETY: the entry succeeded, so it wrote `d`: pointers into the
+        // child's immutable data, which outlives every use of this set, with
+        // the counts the SDK checked (indices within the positions).
+        let slices = unsafe {
+            let d = d.assume_init();
+            TriangleSlices {
+                positions: slice_or_empty(d.positions, d.vertex_count),
+                indices: slice_or_empty(d.indices, d.triangle_count),
+            }
+        };
+        Ok(Some(slices))
     }
 
     /// Number of primitives.

@@ -216,6 +216,33 @@ pub trait PrimitiveSet: Object {
     }
 }
 
+/// Capability: triangles as data. The object lends its vertex positions and
+/// index triples (triangle `i` is primitive `i`), so an aggregate can store
+/// and intersect them itself, inline, with the kernel's watertight routine,
+/// instead of calling `intersect_prims` once per leaf. Its `local_geom` must
+/// read the hit record an aggregate writes for it (see
+/// [`TriangleData`](crate::abi::TriangleData)): `hit.entry(level).prim` and
+/// `.uv = [b1, b2]`, which is what [`Hit::record_leaf`] writes too.
+pub trait Triangles: PrimitiveSet {
+    /// Positions and index triples, unchanged after `prepare`.
+    fn triangles(&self) -> TriangleSlices<'_>;
+}
+
+/// What [`Triangles::triangles`] lends.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleSlices<'a> {
+    /// Vertex positions.
+    pub positions: &'a [[f32; 3]],
+    /// Vertex indices of each triangle, below `positions.len()`.
+    pub indices: &'a [[u32; 3]],
+}
+
+/// Capability (a marker): this aggregate builds its own structure over its
+/// children's primitives (through [`Child::prim_set`]). The shell then adds
+/// an object that offers the primitive-set protocol to it as is, not wrapped
+/// in that object's own acceleration structure (the `accel` key).
+pub trait FlattensPrimitives: Object {}
+
 /// Capability: creation from a transform the shell composed and checked.
 /// The class named by [`crate::classes::INSTANCE_TRANSFORM`] offers it.
 pub trait FromTransform: Object {

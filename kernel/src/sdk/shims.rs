@@ -221,6 +221,8 @@ pub fn object_module<T: Object, D: Decl>() -> ObjectModule {
         prim_bounds: None,
         intersect_prims: None,
         occluded_prims: None,
+        triangles: None,
+        flattens_primitives: false,
     }
 }
 
@@ -327,6 +329,22 @@ impl<T: PrimitiveSet, D: Decl> Install<T, D> {
 }
 
 #[allow(non_snake_case)]
+impl<T: Triangles, D: Decl> Install<T, D> {
+    /// Lend triangles as data.
+    pub fn Triangles(m: &mut ObjectModule) {
+        m.triangles = Some(obj_triangles::<T>);
+    }
+}
+
+#[allow(non_snake_case)]
+impl<T: FlattensPrimitives, D: Decl> Install<T, D> {
+    /// Say that the aggregate flattens primitive sets.
+    pub fn FlattensPrimitives(m: &mut ObjectModule) {
+        m.flattens_primitives = true;
+    }
+}
+
+#[allow(non_snake_case)]
 impl<T: FromTransform, D: Decl> Install<T, D> {
     /// Offer creation from a composed transform.
     pub fn FromTransform(m: &mut ObjectModule) {
@@ -356,6 +374,38 @@ unsafe extern "C" fn obj_from_transform<T: FromTransform>(
         Ok(())
     });
     out
+}
+
+unsafe extern "C" fn obj_triangles<T: Triangles>(
+    this: *const c_void,
+    out: *mut TriangleData,
+    sink: ErrSink,
+) -> i32 {
+    cold(sink, || {
+        // SAFETY: the caller passes the live object and a valid output; the
+        // slices live as long as the object, which is immutable after `prepare`.
+        let t = unsafe { obj::<T>(this) }.triangles();
+        let nv = t.positions.len();
+        if let Some(bad) = t.indices.iter().flatten().find(|&&i| i as usize >= nv) {
+            return Err(PluginError::msg(format!(
+                "triangle index {bad} is beyond the {nv} vertices"
+            )));
+        }
+        let (vertex_count, triangle_count) = (
+            u32::try_from(nv).map_err(|_| PluginError::msg("too many vertices"))?,
+            u32::try_from(t.indices.len()).map_err(|_| PluginError::msg("too many triangles"))?,
+        );
+        // SAFETY: valid output record.
+        unsafe {
+            *out = TriangleData {
+                positions: t.positions.as_ptr(),
+                vertex_count,
+                indices: t.indices.as_ptr(),
+                triangle_count,
+            }
+        };
+        Ok(())
+    })
 }
 
 unsafe extern "C" fn obj_prim_count<T: PrimitiveSet>(

@@ -1,9 +1,8 @@
 #![doc = include_str!("../README.md")]
 
-mod bvh;
 mod load;
 
-use rtk_kernel::geom::{intersect_triangle, triangle_point_and_error, RayBoxPrecomp};
+use rtk_kernel::geom::{intersect_triangle, triangle_point_and_error};
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -17,44 +16,30 @@ enum Normals {
     Vertex,
 }
 
-#[derive(Deserialize, Clone, Copy, PartialEq)]
-#[serde(crate = "rtk_kernel::serde", rename_all = "lowercase")]
-enum Accel {
-    Bvh,
-    None,
-}
-
 #[derive(Deserialize)]
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
     file: String,
     #[serde(default = "auto")]
     normals: Normals,
-    #[serde(default = "bvh")]
-    accel: Accel,
 }
 
 fn auto() -> Normals {
     Normals::Auto
 }
-fn bvh() -> Accel {
-    Accel::Bvh
-}
 
 struct Mesh {
     path: PathBuf,
     normals_mode: Normals,
-    accel: Accel,
     p: Vec<[f32; 3]>,
     tris: Vec<[u32; 3]>,
     vn: Option<Vec<Vec3>>,
     uv: Option<Vec<[f32; 2]>>,
-    bvh: Option<bvh::Bvh>,
     bounds: Bounds3,
     /// Each triangle's three vertices, contiguous: the hot loop reads one
     /// 36-byte record per triangle instead of following three indices.
     tv: Vec<[[f32; 3]; 3]>,
-    /// 0..n, for `accel = "none"`.
+    /// 0..n: every triangle, for the brute-force queries.
     all_ids: Vec<u32>,
 }
 
@@ -116,29 +101,13 @@ impl Mesh {
         })
     }
 
+    /// Nearest hit by testing every triangle: a mesh is intersected fast
+    /// only inside an aggregate (the shell wraps it in one: `accel`).
     fn nearest(&self, ctx: &mut TraceCtx, ray: &Ray) -> Option<(f32, u32, [f32; 2])> {
         let mut best = None;
         let mut prim_tests = 0;
-        match &self.bvh {
-            Some(b) => {
-                let pre = RayBoxPrecomp::new(ray);
-                b.traverse(
-                    &pre,
-                    ray.t_min,
-                    ray.t_max,
-                    &mut ctx.stats.node_tests,
-                    |ids, t_max| {
-                        self.test_ids(ray, ids, &mut best, &mut prim_tests);
-                        // Keep boxes that touch the current best: a tie may still come.
-                        Some(best.map_or(t_max, |(t, _, _)| t.next_up()))
-                    },
-                );
-            }
-            None => {
-                for chunk in self.all_ids.chunks(256) {
-                    self.test_ids(ray, chunk, &mut best, &mut prim_tests);
-                }
-            }
+        for chunk in self.all_ids.chunks(256) {
+            self.test_ids(ray, chunk, &mut best, &mut prim_tests);
         }
         ctx.stats.prim_tests += prim_tests;
         best
@@ -165,12 +134,10 @@ impl Plugin for Mesh {
         Ok(Mesh {
             path: env.resolve(&p.file),
             normals_mode: p.normals,
-            accel: p.accel,
             p: vec![],
             tris: vec![],
             vn: None,
             uv: None,
-            bvh: None,
             bounds: Bounds3::EMPTY,
             tv: vec![],
             all_ids: vec![],
@@ -213,9 +180,6 @@ impl Object for Mesh {
             .map(|i| self.tri_bounds(i))
             .collect();
         self.bounds = boxes.iter().fold(Bounds3::EMPTY, |a, b| a.union(*b));
-        if self.accel == Accel::Bvh {
-            self.bvh = Some(bvh::Bvh::build(&boxes));
-        }
         Ok(())
     }
 
@@ -235,24 +199,7 @@ impl Object for Mesh {
 
     fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, _level: u32) -> bool {
         let mut tests = 0;
-        let found = match &self.bvh {
-            Some(b) => {
-                let pre = RayBoxPrecomp::new(ray);
-                let mut found = false;
-                b.traverse(
-                    &pre,
-                    ray.t_min,
-                    ray.t_max,
-                    &mut ctx.stats.node_tests,
-                    |ids, t_max| {
-                        found = self.any_ids(ray, ids, &mut tests);
-                        (!found).then_some(t_max)
-                    },
-                );
-                found
-            }
-            None => self.any_ids(ray, &self.all_ids, &mut tests),
-        };
+        let found = self.any_ids(ray, &self.all_ids, &mut tests);
         ctx.stats.prim_tests += tests;
         found
     }
@@ -375,9 +322,18 @@ impl Mesh {
     }
 }
 
+impl Triangles for Mesh {
+    fn triangles(&self) -> TriangleSlices<'_> {
+        TriangleSlices {
+            positions: &self.p,
+            indices: &self.tris,
+        }
+    }
+}
+
 rtk_kernel::export_object!(
     Mesh,
     class = "mesh",
     doc = include_str!("../README.md"),
-    capabilities = [PrimitiveSet]
+    capabilities = [PrimitiveSet, Triangles]
 );

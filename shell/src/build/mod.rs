@@ -84,7 +84,7 @@ fn build_world(
 ) -> Result<World, SceneError> {
     let reach = reach::Reach::walk(&desc)?;
     let t0 = Instant::now();
-    let plugins = needs::load(&desc, &reach, registry)?;
+    let needs::Loaded { plugins, accel } = needs::load(&desc, &reach, registry)?;
     let load_plugins = t0.elapsed();
 
     let host = PrepareHost {
@@ -97,6 +97,7 @@ fn build_world(
         file.dir().to_string_lossy().into_owned(),
         host,
     );
+    b.accel = accel;
     let t1 = Instant::now();
     let Others {
         camera,
@@ -105,7 +106,7 @@ fn build_world(
     } = create_others(&b, &desc)?;
     b.create_time += t1.elapsed();
     let root_inst = &desc.render.root;
-    let root = b.instance(root_inst)?;
+    let root = b.instance(root_inst, false)?;
     let root_bind = b.bindings(root_inst)?;
     let bounds = root.bounds(0.0, 1.0).map_err(|e| {
         SceneError::new(

@@ -4,9 +4,10 @@
 use super::reach::Reach;
 use crate::desc::Desc;
 use crate::error::{ErrorKind, SceneError};
-use crate::plugins::{library_file_name, ClassError, Plugin, Registry};
+use crate::plugins::{library_file_name, ClassError, Module, Plugin, Registry};
 use crate::tree::Origin;
 use rtk_kernel::abi::PluginKind;
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// One class the scene needs, and where it asks for it.
@@ -59,14 +60,81 @@ fn needs(desc: &Desc, reach: &Reach) -> Vec<Need> {
     out
 }
 
-/// Load the plugins the reachable scene needs (each once).
+/// What loading decided: the plugins, and the aggregate class the shell
+/// wraps each primitive-set definition in (by definition name).
+pub(crate) struct Loaded {
+    pub plugins: Vec<Arc<Plugin>>,
+    pub accel: BTreeMap<String, String>,
+}
+
+/// Load the plugins the reachable scene needs (each once), then the
+/// aggregate classes over the definitions whose class offers primitives.
 pub(crate) fn load(
     desc: &Desc,
     reach: &Reach,
     registry: &mut Registry,
-) -> Result<Vec<Arc<Plugin>>, SceneError> {
+) -> Result<Loaded, SceneError> {
     let mut plugins: Vec<Arc<Plugin>> = Vec::new();
-    for n in needs(desc, reach) {
+    load_needs(needs(desc, reach), registry, &mut plugins)?;
+    let (accel, accel_needs) = accel_needs(desc, reach, registry)?;
+    load_needs(accel_needs, registry, &mut plugins)?;
+    Ok(Loaded { plugins, accel })
+}
+
+/// The aggregate each reachable primitive-set definition is wrapped in: its
+/// `accel` key, else the kernel's default. `accel` on a class without
+/// primitives is refused.
+fn accel_needs(
+    desc: &Desc,
+    reach: &Reach,
+    registry: &Registry,
+) -> Result<(BTreeMap<String, String>, Vec<Need>), SceneError> {
+    let (mut accel, mut needs) = (BTreeMap::new(), Vec::new());
+    for o in &reach.objects {
+        let od = &desc.objects[o];
+        let offers = matches!(
+            registry.loaded_class(&od.def.class).map(|p| p.module),
+            Some(Module::Object(m)) if m.prim_count().is_some()
+        );
+        let (class, origin) = match (&od.accel, offers) {
+            (Some(a), false) if a.class.is_some() => {
+                return Err(SceneError::invalid(
+                    &a.origin,
+                    od.def.path(),
+                    "accel",
+                    format!(
+                        "class `{}` has no primitives to build an aggregate over (it offers no primitive set)",
+                        od.def.class
+                    ),
+                ))
+            }
+            (None, true) => (
+                rtk_kernel::classes::DEFAULT_ACCEL.to_string(),
+                od.def.class_origin.clone(),
+            ),
+            (Some(a), true) => match &a.class {
+                Some(c) => (c.clone(), a.origin.clone()),
+                None => continue,
+            },
+            _ => continue,
+        };
+        needs.push(Need {
+            class: class.clone(),
+            kind: PluginKind::Object,
+            origin,
+            object: format!("{}.accel", od.def.path()),
+        });
+        accel.insert(o.clone(), class);
+    }
+    Ok((accel, needs))
+}
+
+fn load_needs(
+    needs: Vec<Need>,
+    registry: &mut Registry,
+    plugins: &mut Vec<Arc<Plugin>>,
+) -> Result<(), SceneError> {
+    for n in needs {
         let p = registry.get(&n.class).map_err(|e| class_error(e, &n))?;
         if p.kind != n.kind {
             return Err(SceneError::new(
@@ -86,7 +154,7 @@ pub(crate) fn load(
             plugins.push(p);
         }
     }
-    Ok(plugins)
+    Ok(())
 }
 
 fn class_error(e: ClassError, n: &Need) -> SceneError {

@@ -30,6 +30,10 @@ pub(crate) struct Builder<'a> {
     pub scene_dir: String,
     pub prepare_host: PrepareHost<'a>,
     made: HashMap<String, Object>,
+    /// The aggregate class each primitive-set definition is wrapped in.
+    pub accel: BTreeMap<String, String>,
+    /// The wrapped objects, by definition (one wrapper serves every instance).
+    wrapped: HashMap<String, Object>,
     shader_ids: BTreeMap<ShaderKey, u32>,
     pub shaders: Vec<Shader>,
     pub objects_created: usize,
@@ -50,6 +54,8 @@ impl<'a> Builder<'a> {
             scene_dir,
             prepare_host,
             made: HashMap::new(),
+            accel: BTreeMap::new(),
+            wrapped: HashMap::new(),
             shader_ids: BTreeMap::new(),
             shaders: Vec::new(),
             objects_created: 0,
@@ -83,10 +89,23 @@ impl<'a> Builder<'a> {
         }
     }
 
-    /// The object an instance puts in its parent: the definition's object, or
-    /// an instance-transform object of its own around it.
-    pub(crate) fn instance(&mut self, inst: &Instance) -> Result<Object, SceneError> {
-        let child = self.object(&inst.object)?;
+    /// The object an instance puts in its parent: the definition's object
+    /// (wrapped in its `accel` aggregate unless the parent flattens primitive
+    /// sets and the instance has no transform), or an instance-transform
+    /// object of its own around it.
+    pub(crate) fn instance(
+        &mut self,
+        inst: &Instance,
+        parent_flattens: bool,
+    ) -> Result<Object, SceneError> {
+        let flattened = parent_flattens && inst.transform.is_none();
+        let child = match self.accel.get(&inst.object) {
+            Some(class) if !flattened => {
+                let class = class.clone();
+                self.wrapped(&inst.object, &class)?
+            }
+            _ => self.object(&inst.object)?,
+        };
         let Some(m) = &inst.transform else {
             return Ok(child);
         };
@@ -110,6 +129,38 @@ impl<'a> Builder<'a> {
         self.prepared(b).map_err(fail)
     }
 
+    /// The definition's object inside an aggregate of `class`, made once.
+    fn wrapped(&mut self, name: &str, class: &str) -> Result<Object, SceneError> {
+        if let Some(o) = self.wrapped.get(name) {
+            return Ok(o.clone());
+        }
+        let inner = self.object(name)?;
+        let od = &self.desc.objects[name];
+        let path = format!("{}.accel", od.def.path());
+        let origin = od
+            .accel
+            .as_ref()
+            .map_or(&od.def.class_origin, |a| &a.origin);
+        let fail = |e: CallError| {
+            SceneError::new(
+                ErrorKind::PluginCall,
+                origin,
+                od.def.path(),
+                "accel",
+                format!("plugin `{class}` (its accel) {e}"),
+            )
+        };
+        let t = Instant::now();
+        let module = self.object_class(class);
+        let mut b = ObjectBuilder::create(module, "{}", &self.args(&path)).map_err(fail)?;
+        self.objects_created += 1;
+        b.add_child(&inner, InstanceData::NONE).map_err(fail)?;
+        self.create_time += t.elapsed();
+        let o = self.prepared(b).map_err(fail)?;
+        self.wrapped.insert(name.to_string(), o.clone());
+        Ok(o)
+    }
+
     fn prepared(&mut self, b: ObjectBuilder) -> Result<Object, CallError> {
         let t = Instant::now();
         let r = b.prepare(&self.prepare_host);
@@ -131,8 +182,9 @@ impl<'a> Builder<'a> {
         self.create_time += t.elapsed();
         let mut b = created.map_err(|e| call_error(def, None, "its parameters", e))?;
         self.objects_created += 1;
+        let flattens = module.flattens_primitives();
         for inst in &od.children {
-            let child = self.instance(inst)?;
+            let child = self.instance(inst, flattens)?;
             let data = self.bindings(inst)?;
             let t = Instant::now();
             let added = b.add_child(&child, data);

@@ -100,11 +100,23 @@ fn params_json(n: &Node, object: &str, skip: &[&str]) -> Result<String, SceneErr
     Ok(serde_json::Value::Object(map).to_string())
 }
 
+/// The `accel` key of an object definition.
+#[derive(Debug, Clone)]
+pub struct Accel {
+    /// The aggregate class, or `None` for `"none"` (test every primitive).
+    pub class: Option<String>,
+    /// Where it was given.
+    pub origin: Origin,
+}
+
 /// An object definition with its instances.
 #[derive(Debug, Clone)]
 pub struct ObjDef {
     /// The definition.
     pub def: Def,
+    /// The aggregate built over its primitives where no parent flattens them
+    /// (`None`: the default, [`DEFAULT_ACCEL`](rtk_kernel::classes::DEFAULT_ACCEL)).
+    pub accel: Option<Accel>,
     /// Its children (empty for primitives).
     pub children: Vec<Instance>,
     /// Where `children` was given, if it was.
@@ -114,10 +126,31 @@ pub struct ObjDef {
 impl ObjDef {
     /// Read `[objects.NAME]`: the definition and its `children` instances.
     pub(crate) fn read(name: &str, n: &Node) -> Result<ObjDef, SceneError> {
-        let def = Def::read("objects", name, n, &["children"])?;
+        let def = Def::read("objects", name, n, &["children", "accel"])?;
+        let accel = n
+            .get("accel")
+            .map(|a| {
+                let class = string(a, &def.path(), "accel")?;
+                if class != "none" && !crate::plugins::is_identifier(&class) {
+                    return Err(SceneError::invalid(
+                        &a.origin,
+                        def.path(),
+                        "accel",
+                        format!(
+                            "`{class}` is not a class name: name an aggregate class, or \"none\""
+                        ),
+                    ));
+                }
+                Ok(Accel {
+                    class: (class != "none").then_some(class),
+                    origin: a.origin.clone(),
+                })
+            })
+            .transpose()?;
         let Some(c) = n.get("children") else {
             return Ok(ObjDef {
                 def,
+                accel,
                 children: Vec::new(),
                 children_origin: None,
             });
@@ -140,6 +173,7 @@ impl ObjDef {
             .collect::<Result<_, _>>()?;
         Ok(ObjDef {
             def,
+            accel,
             children,
             children_origin: Some(c.origin.clone()),
         })

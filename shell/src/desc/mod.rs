@@ -13,7 +13,7 @@ pub mod defs;
 pub mod instance;
 pub mod render;
 
-pub use defs::{Def, ObjDef};
+pub use defs::{Accel, Def, ObjDef};
 pub use instance::Instance;
 pub use render::{Render, MAX_PIXELS};
 

@@ -1,0 +1,338 @@
+//! `rtk trace`: cast rays against a scene's root (or a mesh under any
+//! aggregate) and report throughput, build time, memory and checksums — the
+//! interface benchmarks, tests and other tools use.
+
+use crate::rays::{self, HitRec, RayRec};
+use anyhow::{bail, Context, Result};
+use rtk_kernel::abi::{Hit, Ray, Stats, TraceCtx};
+use rtk_shell::{Parallel, PluginPath, Registry, World};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The arguments of `rtk trace`.
+#[derive(clap::Args)]
+pub struct TraceArgs {
+    /// A scene (.toml), or a mesh (.ply, .obj) traced under `--aggregate`.
+    pub input: PathBuf,
+    /// Rays to trace: a ray file (docs/trace.md).
+    #[arg(long, value_name = "FILE", conflicts_with = "rayset")]
+    pub rays: Option<PathBuf>,
+    /// Rays to trace: a set of the Embree anchor's RAYS.md, generated over the root's box.
+    #[arg(long, value_enum)]
+    pub rayset: Option<RaySet>,
+    /// Any-hit queries (shadow rays) instead of nearest hits.
+    #[arg(long)]
+    pub occluded: bool,
+    /// The aggregate class: over the mesh, or in place of the scene root's class.
+    #[arg(long, value_name = "NAME")]
+    pub aggregate: Option<String>,
+    /// Tracing threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Write one hit record per ray to FILE (docs/trace.md).
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Write the rays traced to FILE (a ray file).
+    #[arg(long = "save-rays", value_name = "FILE")]
+    pub save_rays: Option<PathBuf>,
+    /// Timed passes over the rays (the median is reported).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub iters: u32,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Extra folders to search for plugins first (repeatable).
+    #[arg(long = "plugin-path", value_name = "DIR")]
+    pub plugin_path: Vec<PathBuf>,
+}
+
+/// The generated ray sets.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum RaySet {
+    /// 1024x1024 pinhole rays through pixel centres.
+    Primary,
+    /// 2^20 rays from the padded box's surface, uniform inward directions.
+    Incoherent,
+}
+
+/// Rays per task: as the Embree anchor splits its work.
+const CHUNK: usize = 4096;
+
+/// Run `rtk trace`.
+pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> Result<()> {
+    let rss0 = resident_bytes();
+    let t_build = Instant::now();
+    let world = load_world(&a, parallel)?;
+    let build = t_build.elapsed().as_secs_f64();
+    let memory = resident_bytes().saturating_sub(rss0);
+    let b = world.bounds;
+    if b.is_empty() {
+        bail!(
+            "{}: the scene is empty (its root has no bounds)",
+            a.input.display()
+        );
+    }
+    let (lo, hi) = (
+        b.min.to_array().map(|x| x as f64),
+        b.max.to_array().map(|x| x as f64),
+    );
+    let (set_name, rays) = match (&a.rays, a.rayset) {
+        (Some(p), _) => (p.display().to_string(), rays::read_rays(p)?),
+        (None, Some(RaySet::Primary)) => ("primary".into(), rays::primary(lo, hi)),
+        (None, Some(RaySet::Incoherent)) => ("incoherent".into(), rays::incoherent(lo, hi)),
+        (None, None) => {
+            bail!("say which rays to trace: --rays FILE or --rayset primary|incoherent")
+        }
+    };
+    if let Some(p) = &a.save_rays {
+        rays::write_rays(p, &rays)?;
+    }
+    let mut times = Vec::new();
+    let mut result = None;
+    for _ in 0..a.iters.max(1) {
+        let t = Instant::now();
+        let r = trace_all(&world, &rays, a.occluded, pool)?;
+        times.push(t.elapsed().as_secs_f64());
+        result = Some(r);
+    }
+    let Some((hits, stats)) = result else {
+        unreachable!("at least one pass runs")
+    };
+    times.sort_by(f64::total_cmp);
+    let secs = times[times.len() / 2];
+    if let Some(p) = &a.out {
+        std::fs::write(p, rays::hit_bytes(&hits))
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    let report = Report {
+        input: a.input.display().to_string(),
+        set: set_name,
+        query: if a.occluded { "occluded" } else { "intersect" },
+        rays: rays.len(),
+        rays_hash: format!("{:016x}", rays::rays_hash(&rays)),
+        threads: pool.current_num_threads(),
+        seconds: secs,
+        build_seconds: build,
+        memory_bytes: memory,
+        hits: &hits,
+        stats: &stats,
+    };
+    report.print(a.json);
+    Ok(())
+}
+
+/// The world to trace: the scene, or a generated one over the mesh.
+fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
+    let mut registry = Registry::new(PluginPath::standard(&a.plugin_path));
+    let ext = a
+        .input
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let (file, sets) = match ext.as_deref() {
+        Some("ply") | Some("obj") => (mesh_scene(&a.input, a.aggregate.as_deref())?, vec![]),
+        _ => {
+            let file = rtk_shell::SceneFile::read(&a.input)?;
+            let sets = match &a.aggregate {
+                Some(class) => vec![format!("objects.{}.class={class}", root_object(&file)?)],
+                None => vec![],
+            };
+            (file, sets)
+        }
+    };
+    let mut file = file;
+    file.apply_overrides(&sets)?;
+    let desc = rtk_shell::Desc::from_file(&file)?;
+    Ok(rtk_shell::build(&file, desc, &mut registry, parallel)?)
+}
+
+/// A scene holding the mesh (tested by brute force: `accel = "none"`)
+/// under one aggregate, `bvh` by default.
+fn mesh_scene(mesh: &Path, aggregate: Option<&str>) -> Result<rtk_shell::SceneFile> {
+    let abs = std::path::absolute(mesh).with_context(|| format!("{}", mesh.display()))?;
+    let agg = aggregate.unwrap_or(rtk_kernel::classes::DEFAULT_ACCEL);
+    let file = toml_string(&abs.to_string_lossy());
+    let text = format!(
+        "[render]\nroot = \"world\"\nintegrator = \"normals\"\n[cameras.none]\nclass = \"pinhole\"\n\
+         [objects.mesh]\nclass = \"mesh\"\nfile = {file}\naccel = \"none\"\n\
+         [objects.world]\nclass = {}\nchildren = [\"mesh\"]\n",
+        toml_string(agg)
+    );
+    Ok(rtk_shell::SceneFile::parse(
+        &abs.with_extension("trace.toml"),
+        text,
+    )?)
+}
+
+fn toml_string(s: &str) -> String {
+    toml_quote(s)
+}
+
+/// A TOML basic string holding `s`.
+fn toml_quote(s: &str) -> String {
+    let mut out = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if c.is_control() => out.push_str(&format!("\\u{:04X}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// The object name the scene's `[render] root` instances.
+fn root_object(file: &rtk_shell::SceneFile) -> Result<String> {
+    let root = file
+        .root
+        .get("render")
+        .and_then(|r| r.get("root"))
+        .context("--aggregate needs a scene with [render] root")?;
+    match &root.value {
+        rtk_shell::tree::Val::Str(s) => Ok(s.clone()),
+        _ => match root.get("object").map(|o| &o.value) {
+            Some(rtk_shell::tree::Val::Str(s)) => Ok(s.clone()),
+            _ => bail!("--aggregate: [render] root names no object"),
+        },
+    }
+}
+
+/// Trace every ray on the pool, in chunks; hits in ray order.
+fn trace_all(
+    world: &World,
+    rays: &[RayRec],
+    occluded: bool,
+    pool: &rayon::ThreadPool,
+) -> Result<(Vec<HitRec>, Stats)> {
+    use rayon::prelude::*;
+    let threads = pool.current_num_threads() as u32;
+    let chunks: Vec<(Vec<HitRec>, Stats, Option<String>)> = pool.install(|| {
+        rays.par_chunks(CHUNK)
+            .map(|chunk| {
+                let ti = rayon::current_thread_index().unwrap_or(0) as u32;
+                let mut ctx = TraceCtx::new(ti, threads, 0);
+                let hits = chunk
+                    .iter()
+                    .map(|r| trace_one(world, &mut ctx, r, occluded))
+                    .collect();
+                let failure = ctx.failure().map(|(c, m)| format!("plugin `{c}` {m}"));
+                (hits, ctx.stats, failure)
+            })
+            .collect()
+    });
+    let mut hits = Vec::with_capacity(rays.len());
+    let mut stats = Stats::default();
+    for (h, s, failure) in chunks {
+        if let Some(f) = failure {
+            bail!("tracing failed: {f}");
+        }
+        hits.extend(h);
+        stats.merge(&s);
+    }
+    Ok((hits, stats))
+}
+
+#[inline]
+fn trace_one(world: &World, ctx: &mut TraceCtx, r: &RayRec, occluded: bool) -> HitRec {
+    let ray = Ray {
+        origin: r.o.into(),
+        dir: r.d.into(),
+        t_min: r.t_min,
+        t_max: r.t_max,
+        time: 0.0,
+        generation: 0,
+    };
+    let miss = HitRec {
+        t: f32::INFINITY,
+        prim: u32::MAX,
+        u: 0.0,
+        v: 0.0,
+    };
+    if occluded {
+        return if world.root.occluded(ctx, &ray) {
+            HitRec {
+                t: 0.0,
+                prim: 1,
+                ..miss
+            }
+        } else {
+            miss
+        };
+    }
+    let mut hit = Hit::new();
+    if !world.root.intersect(ctx, &ray, &mut hit) {
+        return miss;
+    }
+    let e = hit.entry(hit.depth.saturating_sub(1));
+    HitRec {
+        t: hit.t,
+        prim: e.prim,
+        u: e.uv[0],
+        v: e.uv[1],
+    }
+}
+
+/// Resident memory of the process, from /proc (0 where unavailable).
+fn resident_bytes() -> usize {
+    std::fs::read_to_string("/proc/self/statm")
+        .ok()
+        .and_then(|s| s.split_whitespace().nth(1)?.parse::<usize>().ok())
+        .map_or(0, |pages| pages * 4096)
+}
+
+/// What `rtk trace` prints.
+struct Report<'a> {
+    input: String,
+    set: String,
+    query: &'static str,
+    rays: usize,
+    rays_hash: String,
+    threads: usize,
+    seconds: f64,
+    build_seconds: f64,
+    memory_bytes: usize,
+    hits: &'a [HitRec],
+    stats: &'a Stats,
+}
+
+impl Report<'_> {
+    fn print(&self, json: bool) {
+        let n_hits = self.hits.iter().filter(|h| h.t.is_finite()).count();
+        let sum_t: f64 = self
+            .hits
+            .iter()
+            .filter(|h| h.t.is_finite())
+            .map(|h| h.t as f64)
+            .sum();
+        let sum_prim: u64 = self
+            .hits
+            .iter()
+            .filter(|h| h.t.is_finite())
+            .map(|h| h.prim as u64)
+            .sum();
+        let mrays = self.rays as f64 / self.seconds / 1e6;
+        let per_ray = |x: u64| x as f64 / self.rays.max(1) as f64;
+        if json {
+            let j = serde_json::json!({
+                "input": self.input, "set": self.set, "query": self.query,
+                "rays": self.rays, "rays_hash": self.rays_hash, "threads": self.threads,
+                "mrays_per_s": mrays, "trace_seconds": self.seconds,
+                "build_seconds": self.build_seconds, "memory_bytes": self.memory_bytes,
+                "hits": n_hits, "sum_t": sum_t, "sum_prim": sum_prim,
+                "node_tests_per_ray": per_ray(self.stats.node_tests),
+                "prim_tests_per_ray": per_ray(self.stats.prim_tests),
+            });
+            println!("{j}");
+        } else {
+            println!(
+                "{} {} {}: {} rays (hash {}), {} threads\n  {:.2} Mrays/s ({:.3} s), build {:.1} ms, memory {:.1} MB\n  hits {}, sum_t {:.6}, sum_prim {}\n  {:.1} node tests and {:.1} primitive tests per ray",
+                self.input, self.set, self.query, self.rays, self.rays_hash, self.threads,
+                mrays, self.seconds, self.build_seconds * 1e3, self.memory_bytes as f64 / 1e6,
+                n_hits, sum_t, sum_prim,
+                per_ray(self.stats.node_tests), per_ray(self.stats.prim_tests)
+            );
+        }
+    }
+}

@@ -1,0 +1,670 @@
+//! The codebase's one BVH: a binned-SAH binary build collapsed into a
+//! 4-wide tree whose nodes are tested four boxes at a time (SSE), traversed
+//! nearest child first.
+//!
+//! What it takes from the public leaders: Embree's BVH4 (four children per
+//! node in structure-of-arrays layout, one SIMD slab test for all four) and
+//! its binned SAH builder (Wald 2007, 16–32 bins on centroids); tinybvh and
+//! obvhs collapse a binary SAH tree into the wide one the same way (open the
+//! child with the largest surface area until four). Robustness is the
+//! kernel's own (`docs/numerics.md` rule 10): the far distance is widened by
+//! `1 + 2γ₃` (Ize 2013), and a NaN from `0 · ∞` (an origin on a slab plane,
+//! a zero direction component) leaves the previous bound in place, so a box
+//! is never culled by rounding.
+//!
+//! Depth is bounded by construction ([`MAX_DEPTH`]): a node that deep becomes
+//! a leaf however many primitives it holds, so the traversal stack, sized
+//! from that bound, never overflows and never drops a node.
+
+use crate::abi::{Bounds3, Ray};
+use crate::geom::gamma;
+use glam::Vec3;
+use std::ops::Range;
+
+/// Deepest binary tree built; the 4-wide tree is no deeper.
+pub const MAX_DEPTH: usize = 64;
+/// Entries of the traversal stack: at most three siblings pushed per level.
+const STACK: usize = 3 * MAX_DEPTH + 1;
+/// Bins of the SAH sweep per axis.
+const BINS: usize = 16;
+
+/// Build settings, each a trade-off of build time against trace time.
+#[derive(Debug, Clone, Copy)]
+pub struct BuildParams {
+    /// Largest leaf the SAH may choose (larger leaves: fewer nodes, more
+    /// primitive tests).
+    pub max_leaf: usize,
+    /// Cost of a primitive test relative to a node visit, in the SAH.
+    pub prim_cost: f32,
+}
+
+impl Default for BuildParams {
+    /// Leaves of up to 4 primitives, a triangle test costing about one box
+    /// test: what the measurements in BENCHMARKS.md chose.
+    fn default() -> Self {
+        BuildParams {
+            max_leaf: 4,
+            prim_cost: 1.0,
+        }
+    }
+}
+
+/// A node of four children, boxes in structure-of-arrays order.
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug)]
+struct Node4 {
+    /// Lower corners: `lo[axis][child]`.
+    lo: [[f32; 4]; 3],
+    /// Upper corners.
+    hi: [[f32; 4]; 3],
+    /// Inner child: node index; leaf: first primitive (in leaf order).
+    first: [u32; 4],
+    /// 0 for an inner child, else the leaf's primitive count. An empty slot
+    /// has an empty box and is never entered.
+    count: [u32; 4],
+}
+
+const EMPTY_NODE: Node4 = Node4 {
+    lo: [[f32::INFINITY; 4]; 3],
+    hi: [[f32::NEG_INFINITY; 4]; 3],
+    first: [0; 4],
+    count: [0; 4],
+};
+
+/// A 4-wide BVH over primitive boxes. Leaves are ranges of [`Bvh4::order`].
+pub struct Bvh4 {
+    nodes: Vec<Node4>,
+    /// Leaf order: `order[k]` is the primitive stored `k`-th.
+    pub order: Vec<u32>,
+    /// The root is itself a leaf (fewer primitives than a node splits).
+    root_leaf: Option<Range<u32>>,
+    /// Levels of the binary tree built (the 4-wide one is shallower).
+    pub depth: usize,
+    bounds: Bounds3,
+}
+
+/// A binary node during the build.
+struct Node2 {
+    bounds: Bounds3,
+    /// Leaf: range of `order`; inner: the two children.
+    kind: Kind2,
+}
+
+enum Kind2 {
+    Leaf(u32, u32),
+    Inner(u32, u32),
+}
+
+impl Bvh4 {
+    /// Build over `boxes` (one per primitive; empty boxes are never hit).
+    pub fn build(boxes: &[Bounds3], params: BuildParams) -> Bvh4 {
+        let centroids: Vec<Vec3> = boxes
+            .iter()
+            .map(|b| (b.min.v() + b.max.v()) * 0.5)
+            .collect();
+        let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+        let mut b = Builder {
+            boxes,
+            centroids: &centroids,
+            params,
+            nodes: Vec::with_capacity(2 * boxes.len() / params.max_leaf.max(1) + 1),
+            depth: 0,
+        };
+        let root = b.node(&mut order, 0, 1);
+        let bounds = b.nodes[root as usize].bounds;
+        let depth = b.depth;
+        let nodes2 = b.nodes;
+        let mut out = Bvh4 {
+            nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
+            order,
+            root_leaf: None,
+            depth,
+            bounds,
+        };
+        match nodes2[root as usize].kind {
+            Kind2::Leaf(first, n) => out.root_leaf = Some(first..first + n),
+            Kind2::Inner(..) => {
+                out.nodes.push(EMPTY_NODE);
+                out.collapse(&nodes2, root, 0);
+            }
+        }
+        out
+    }
+
+    /// The box of everything.
+    pub fn bounds(&self) -> Bounds3 {
+        self.bounds
+    }
+
+    /// Bytes held by the tree (nodes and leaf order).
+    pub fn bytes(&self) -> usize {
+        self.nodes.capacity() * std::mem::size_of::<Node4>() + self.order.capacity() * 4
+    }
+
+    /// Fill 4-wide node `at` from binary node `n`: open the child with the
+    /// largest area until four children (or only leaves) remain.
+    fn collapse(&mut self, n2: &[Node2], n: u32, at: usize) {
+        let Kind2::Inner(a, b) = n2[n as usize].kind else {
+            unreachable!("collapse starts at an inner node")
+        };
+        let mut kids = vec![a, b];
+        while kids.len() < 4 {
+            let open = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, &k)| matches!(n2[k as usize].kind, Kind2::Inner(..)))
+                .max_by(|x, y| {
+                    area(&n2[*x.1 as usize].bounds).total_cmp(&area(&n2[*y.1 as usize].bounds))
+                })
+                .map(|(i, _)| i);
+            let Some(i) = open else { break };
+            let Kind2::Inner(l, r) = n2[kids[i] as usize].kind else {
+                unreachable!("only inner nodes are opened")
+            };
+            kids.splice(i..=i, [l, r]);
+        }
+        let mut node = EMPTY_NODE;
+        for (slot, &k) in kids.iter().enumerate() {
+            let bb = n2[k as usize].bounds;
+            for axis in 0..3 {
+                node.lo[axis][slot] = bb.min.v()[axis];
+                node.hi[axis][slot] = bb.max.v()[axis];
+            }
+            match n2[k as usize].kind {
+                Kind2::Leaf(first, count) => {
+                    node.first[slot] = first;
+                    // A leaf of no primitives (never made) would read as inner.
+                    node.count[slot] = count.max(1);
+                }
+                Kind2::Inner(..) => {
+                    let child = self.nodes.len();
+                    self.nodes.push(EMPTY_NODE);
+                    node.first[slot] = child as u32;
+                    self.collapse(n2, k, child);
+                }
+            }
+        }
+        self.nodes[at] = node;
+    }
+
+    /// Visit the leaves `ray` may hit over `(t_min, t_max)`, nearest child
+    /// first. `leaf(range)` tests a leaf's primitives (a range of
+    /// [`Bvh4::order`], i.e. of a table reordered by it) and returns the
+    /// narrowed `t_max`, or `None` to stop (any-hit queries). Boxes whose
+    /// entry lies beyond the current `t_max` are skipped; an entry equal to it
+    /// is still visited (a tie may be won there).
+    #[inline]
+    pub fn traverse(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        mut leaf: impl FnMut(Range<usize>) -> Option<f32>,
+    ) {
+        if let Some(r) = &self.root_leaf {
+            leaf(r.start as usize..r.end as usize);
+            return;
+        }
+        if self.nodes.is_empty() {
+            return;
+        }
+        let pre = Precomp::new(ray);
+        let mut t_max = t_max;
+        // (reference, entry distance); a reference is a node index, or a
+        // leaf as (node << 2 | slot) with the top bit set.
+        let mut stack = Stack::new();
+        stack.push((0, ray.t_min));
+        while let Some((r, t_entry)) = stack.pop() {
+            if t_entry > t_max {
+                continue;
+            }
+            if r & LEAF != 0 {
+                let (n, slot) = ((r & !LEAF) >> 2, (r & 3) as usize);
+                let node = &self.nodes[n as usize];
+                let first = node.first[slot] as usize;
+                match leaf(first..first + node.count[slot] as usize) {
+                    Some(t) => t_max = t,
+                    None => return,
+                }
+                continue;
+            }
+            let node = &self.nodes[r as usize];
+            *node_tests += 1;
+            let (mask, t_near) = pre.test4(node, ray.t_min, t_max);
+            // Push the hit children farthest first, so the nearest is popped next.
+            let mut kids = [(0u32, 0f32); 4];
+            let mut n = 0;
+            for (slot, &t_near) in t_near.iter().enumerate() {
+                if mask & (1 << slot) != 0 {
+                    let child = if node.count[slot] == 0 {
+                        node.first[slot]
+                    } else {
+                        LEAF | (r << 2) | slot as u32
+                    };
+                    kids[n] = (child, t_near);
+                    n += 1;
+                }
+            }
+            // Insertion sort of at most four, farthest first.
+            for i in 1..n {
+                let mut j = i;
+                while j > 0 && kids[j - 1].1 < kids[j].1 {
+                    kids.swap(j - 1, j);
+                    j -= 1;
+                }
+            }
+            for &k in &kids[..n] {
+                stack.push(k);
+            }
+        }
+    }
+}
+
+/// Marks a leaf on the traversal stack.
+const LEAF: u32 = 1 << 31;
+
+/// The traversal stack: [`STACK`] entries, not initialised (the stack is
+/// created once per ray; zeroing 1.5 KB would cost more than a node test).
+struct Stack {
+    items: [std::mem::MaybeUninit<(u32, f32)>; STACK],
+    len: usize,
+}
+
+impl Stack {
+    #[inline]
+    fn new() -> Self {
+        Stack {
+            items: [std::mem::MaybeUninit::uninit(); STACK],
+            len: 0,
+        }
+    }
+
+    /// Push; the depth bound (`MAX_DEPTH`, three siblings a level) makes
+    /// overflow impossible, and indexing checks it regardless.
+    #[inline]
+    fn push(&mut self, v: (u32, f32)) {
+        self.items[self.len] = std::mem::MaybeUninit::new(v);
+        self.len += 1;
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: every item below `len` was written by `push`.
+        Some(unsafe { self.items[self.len].assume_init() })
+    }
+}
+
+/// Surface area (half of it: only ratios matter).
+fn area(b: &Bounds3) -> f32 {
+    if b.is_empty() {
+        return 0.0;
+    }
+    let e = b.max.v() - b.min.v();
+    e.x * e.y + e.y * e.z + e.z * e.x
+}
+
+struct Builder<'a> {
+    boxes: &'a [Bounds3],
+    centroids: &'a [Vec3],
+    params: BuildParams,
+    nodes: Vec<Node2>,
+    depth: usize,
+}
+
+/// The best split of a node found by the SAH sweep.
+struct Split {
+    axis: usize,
+    /// Primitives in bins below this one go left.
+    bin: usize,
+    cost: f32,
+}
+
+impl Builder<'_> {
+    /// Build the node over `ids` (at `first` in the order) at `level`.
+    fn node(&mut self, ids: &mut [u32], first: usize, level: usize) -> u32 {
+        self.depth = self.depth.max(level);
+        let bounds = ids
+            .iter()
+            .fold(Bounds3::EMPTY, |b, &i| b.union(self.boxes[i as usize]));
+        let me = self.nodes.len() as u32;
+        self.nodes.push(Node2 {
+            bounds,
+            kind: Kind2::Leaf(first as u32, ids.len() as u32),
+        });
+        if ids.len() <= 1 || level >= MAX_DEPTH {
+            return me;
+        }
+        let cb = ids.iter().fold(Bounds3::EMPTY, |b, &i| {
+            b.include(self.centroids[i as usize])
+        });
+        let mid = match self.sah(ids, &cb) {
+            Some(s) if s.cost < self.leaf_cost(ids.len()) || ids.len() > self.params.max_leaf => {
+                self.partition(ids, &cb, &s)
+            }
+            Some(_) => return me,
+            // All centroids in one bin (coincident): split the list in half
+            // if it is too big for a leaf, else keep it.
+            None if ids.len() > self.params.max_leaf => ids.len() / 2,
+            None => return me,
+        };
+        let (l, r) = ids.split_at_mut(mid);
+        let a = self.node(l, first, level + 1);
+        let b = self.node(r, first + mid, level + 1);
+        self.nodes[me as usize].kind = Kind2::Inner(a, b);
+        me
+    }
+
+    /// SAH cost of making `n` primitives a leaf, relative to traversing a node.
+    fn leaf_cost(&self, n: usize) -> f32 {
+        n as f32 * self.params.prim_cost
+    }
+
+    /// The cheapest binned split, if the centroids spread over more than one bin.
+    fn sah(&self, ids: &[u32], cb: &Bounds3) -> Option<Split> {
+        let ext = cb.max.v() - cb.min.v();
+        let parent = area(
+            &ids.iter()
+                .fold(Bounds3::EMPTY, |b, &i| b.union(self.boxes[i as usize])),
+        );
+        let mut best: Option<Split> = None;
+        for axis in 0..3 {
+            if !(ext[axis] > 0.0) {
+                continue;
+            }
+            let mut bins = [(Bounds3::EMPTY, 0u32); BINS];
+            for &i in ids {
+                let k = bin_of(
+                    self.centroids[i as usize][axis],
+                    cb.min.v()[axis],
+                    ext[axis],
+                );
+                bins[k].0 = bins[k].0.union(self.boxes[i as usize]);
+                bins[k].1 += 1;
+            }
+            // Sweep: areas and counts of everything right of each boundary.
+            let mut right = [(0f32, 0u32); BINS];
+            let (mut rb, mut rn) = (Bounds3::EMPTY, 0);
+            for k in (1..BINS).rev() {
+                rb = rb.union(bins[k].0);
+                rn += bins[k].1;
+                right[k] = (area(&rb), rn);
+            }
+            let (mut lb, mut ln) = (Bounds3::EMPTY, 0);
+            for k in 1..BINS {
+                lb = lb.union(bins[k - 1].0);
+                ln += bins[k - 1].1;
+                let (ra, rn) = right[k];
+                if ln == 0 || rn == 0 {
+                    continue;
+                }
+                let cost = 1.0
+                    + self.params.prim_cost * (area(&lb) * ln as f32 + ra * rn as f32)
+                        / parent.max(f32::MIN_POSITIVE);
+                if best.as_ref().is_none_or(|b| cost < b.cost) {
+                    best = Some(Split { axis, bin: k, cost });
+                }
+            }
+        }
+        best
+    }
+
+    /// Put the primitives of bins below `s.bin` first; returns how many.
+    fn partition(&self, ids: &mut [u32], cb: &Bounds3, s: &Split) -> usize {
+        let (lo, ext) = (cb.min.v()[s.axis], cb.max.v()[s.axis] - cb.min.v()[s.axis]);
+        let c = self.centroids;
+        let mut i = 0;
+        for j in 0..ids.len() {
+            if bin_of(c[ids[j] as usize][s.axis], lo, ext) < s.bin {
+                ids.swap(i, j);
+                i += 1;
+            }
+        }
+        i
+    }
+}
+
+/// The bin of a centroid coordinate.
+#[inline]
+fn bin_of(x: f32, lo: f32, ext: f32) -> usize {
+    let k = ((x - lo) / ext * BINS as f32) as isize;
+    k.clamp(0, BINS as isize - 1) as usize
+}
+
+/// What a ray's box tests share: origin, reciprocal direction, and which
+/// corner is near on each axis.
+struct Precomp {
+    o: [f32; 3],
+    inv: [f32; 3],
+    /// Per axis: the near plane is the upper corner (direction negative).
+    neg: [bool; 3],
+}
+
+/// Widening of the far distance that makes the slab test conservative.
+fn far_scale() -> f32 {
+    1.0 + 2.0 * gamma::<f32>(3)
+}
+
+impl Precomp {
+    fn new(ray: &Ray) -> Self {
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        // 1/±0 = ±inf: an axis the ray does not move along.
+        let inv = d.map(|x| 1.0 / x);
+        Precomp {
+            o,
+            inv,
+            // The sign of the reciprocal orders the slab (never a comparison
+            // of t values, which a NaN would spoil).
+            neg: inv.map(|x| x.is_sign_negative()),
+        }
+    }
+
+    /// The children of `n` the ray's interval `[t_min, t_max]` overlaps: a
+    /// bit mask and each child's entry distance.
+    #[inline]
+    fn test4(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: SSE and SSE2 are part of the x86_64 baseline: every
+            // x86_64 CPU runs them.
+            unsafe { self.test4_sse(n, t_min, t_max) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            self.test4_scalar(n, t_min, t_max)
+        }
+    }
+
+    /// The portable test, one box at a time, with the same NaN rule.
+    #[allow(dead_code)]
+    fn test4_scalar(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
+        let (mut mask, mut tn) = (0, [0f32; 4]);
+        for (slot, tn) in tn.iter_mut().enumerate() {
+            let (mut t0, mut t1) = (t_min, t_max);
+            for a in 0..3 {
+                let (near, far) = if self.neg[a] {
+                    (n.hi[a][slot], n.lo[a][slot])
+                } else {
+                    (n.lo[a][slot], n.hi[a][slot])
+                };
+                let tna = (near - self.o[a]) * self.inv[a];
+                let tfa = (far - self.o[a]) * self.inv[a] * far_scale();
+                // A NaN (0·∞) compares false and leaves the bound as it was.
+                if tna > t0 {
+                    t0 = tna;
+                }
+                if tfa < t1 {
+                    t1 = tfa;
+                }
+            }
+            *tn = t0;
+            if t0 <= t1 {
+                mask |= 1 << slot;
+            }
+        }
+        (mask, tn)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "sse,sse2")]
+    fn test4_sse(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
+        use std::arch::x86_64::*;
+        let mut t0 = _mm_set1_ps(t_min);
+        let mut t1 = _mm_set1_ps(t_max);
+        let scale = _mm_set1_ps(far_scale());
+        for a in 0..3 {
+            let (near, far) = if self.neg[a] {
+                (&n.hi[a], &n.lo[a])
+            } else {
+                (&n.lo[a], &n.hi[a])
+            };
+            let o = _mm_set1_ps(self.o[a]);
+            let inv = _mm_set1_ps(self.inv[a]);
+            // SAFETY: each row is four floats (`Node4` is 64-byte aligned and
+            // its rows 16-byte aligned, but unaligned loads cost the same).
+            let (near, far) = unsafe { (_mm_loadu_ps(near.as_ptr()), _mm_loadu_ps(far.as_ptr())) };
+            let tna = _mm_mul_ps(_mm_sub_ps(near, o), inv);
+            let tfa = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(far, o), inv), scale);
+            // MAXPS/MINPS return the second operand when either is NaN: a
+            // NaN slab (0·∞) leaves the running bound in place.
+            t0 = _mm_max_ps(tna, t0);
+            t1 = _mm_min_ps(tfa, t1);
+        }
+        let mask = _mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32;
+        let mut tn = [0f32; 4];
+        // SAFETY: `tn` has room for the four floats stored.
+        unsafe { _mm_storeu_ps(tn.as_mut_ptr(), t0) };
+        (mask, tn)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::RngState;
+
+    fn random_boxes(n: usize, seed: u64) -> Vec<Bounds3> {
+        let mut r = RngState::seeded(seed);
+        (0..n)
+            .map(|_| {
+                let c = Vec3::new(
+                    r.range_f32(-10.0, 10.0),
+                    r.range_f32(-10.0, 10.0),
+                    r.range_f32(-10.0, 10.0),
+                );
+                let e = Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 0.5;
+                Bounds3::new(c - e, c + e)
+            })
+            .collect()
+    }
+
+    /// Every box a ray overlaps (by the kernel's scalar slab test) is in a
+    /// leaf the traversal visits, and every primitive is in exactly one leaf.
+    fn check(boxes: &[Bounds3], bvh: &Bvh4, seed: u64) {
+        let mut ids = bvh.order.clone();
+        ids.sort_unstable();
+        assert_eq!(ids, (0..boxes.len() as u32).collect::<Vec<_>>());
+        let mut r = RngState::seeded(seed);
+        for k in 0..2000 {
+            let o = Vec3::new(
+                r.range_f32(-15.0, 15.0),
+                r.range_f32(-15.0, 15.0),
+                r.range_f32(-15.0, 15.0),
+            );
+            let mut d = Vec3::new(
+                r.range_f32(-1.0, 1.0),
+                r.range_f32(-1.0, 1.0),
+                r.range_f32(-1.0, 1.0),
+            );
+            // Axis-parallel and ±0 directions too (numerics A1).
+            if k % 5 == 0 {
+                d = [Vec3::X, Vec3::NEG_Y, Vec3::new(0.0, -0.0, 1.0)][k % 3];
+            }
+            let ray = Ray::new(o, d);
+            let pre = crate::geom::RayBoxPrecomp::new(&ray);
+            let want: Vec<u32> = (0..boxes.len() as u32)
+                .filter(|&i| {
+                    pre.intersect(&boxes[i as usize], 0.0, f32::INFINITY)
+                        .is_some()
+                })
+                .collect();
+            let mut got = Vec::new();
+            bvh.traverse(&ray, f32::INFINITY, &mut 0, |range| {
+                got.extend(range.map(|k| bvh.order[k]));
+                Some(f32::INFINITY)
+            });
+            got.sort_unstable();
+            for w in want {
+                assert!(got.binary_search(&w).is_ok(), "box {w} skipped by ray {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn visits_every_box_a_ray_overlaps() {
+        for (n, seed) in [(1, 1), (3, 2), (17, 3), (1000, 4), (5000, 5)] {
+            let boxes = random_boxes(n, seed);
+            let bvh = Bvh4::build(&boxes, BuildParams::default());
+            check(&boxes, &bvh, seed + 100);
+        }
+    }
+
+    #[test]
+    fn coincident_and_flat_boxes() {
+        // All the same box, and boxes flat in z: no bin split exists.
+        let same = vec![Bounds3::new(Vec3::ZERO, Vec3::ONE); 300];
+        check(&same, &Bvh4::build(&same, BuildParams::default()), 7);
+        let flat: Vec<Bounds3> = (0..400)
+            .map(|i| {
+                let x = (i % 20) as f32;
+                let y = (i / 20) as f32;
+                Bounds3::new(Vec3::new(x, y, 0.0), Vec3::new(x + 1.0, y + 1.0, 0.0))
+            })
+            .collect();
+        check(&flat, &Bvh4::build(&flat, BuildParams::default()), 8);
+    }
+
+    #[test]
+    fn depth_is_bounded_for_a_pathological_distribution() {
+        // Boxes spaced geometrically (each 1.5x farther than the last): every
+        // SAH split peels off one box, the deepest tree a builder can make.
+        let boxes: Vec<Bounds3> = (0..3000)
+            .map(|i| {
+                let x = 1.5f32.powi(i % 200);
+                Bounds3::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x * 1.001, 1.0, 1.0))
+            })
+            .collect();
+        let bvh = Bvh4::build(&boxes, BuildParams::default());
+        assert!(bvh.depth <= MAX_DEPTH, "{}", bvh.depth);
+        check(&boxes, &bvh, 9);
+    }
+
+    #[test]
+    fn sse_and_scalar_tests_agree() {
+        let boxes = random_boxes(4, 11);
+        let mut node = EMPTY_NODE;
+        for (s, b) in boxes.iter().enumerate() {
+            for a in 0..3 {
+                node.lo[a][s] = b.min.v()[a];
+                node.hi[a][s] = b.max.v()[a];
+            }
+        }
+        let mut r = RngState::seeded(12);
+        for _ in 0..10_000 {
+            let o = Vec3::new(r.range_f32(-15.0, 15.0), r.range_f32(-15.0, 15.0), 0.0);
+            let d = Vec3::new(
+                r.range_f32(-1.0, 1.0),
+                [0.0, -0.0, 1.0][r.next_u32() as usize % 3],
+                r.range_f32(-1.0, 1.0),
+            );
+            let pre = Precomp::new(&Ray::new(o, d));
+            assert_eq!(
+                pre.test4(&node, 0.0, f32::INFINITY).0,
+                pre.test4_scalar(&node, 0.0, f32::INFINITY).0
+            );
+        }
+    }
+}

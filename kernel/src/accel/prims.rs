@@ -1,0 +1,381 @@
+//! The primitives an aggregate builds over, gathered from its children, and
+//! the leaf queries that return exactly the `list`'s answer.
+//!
+//! Each child contributes, in order of preference:
+//! - its **triangles as data** (capability `Triangles`): copied into this
+//!   table and intersected inline with the kernel's watertight routine — no
+//!   call into the child per leaf;
+//! - its **primitive set** (`PrimitiveSet`): one batched `intersect_prims`
+//!   call per run of its primitives in a leaf;
+//! - **itself**, whole: an opaque object (a transform, another aggregate).
+//!
+//! The tie rule: at equal `t` the lowest (child, primitive) wins, whatever
+//! order a structure visits them in. The query keeps the best key and lets an
+//! equal `t` through (one ulp more) only to a lower key.
+
+use crate::abi::*;
+use crate::geom::{intersect_triangle_sheared, is_degenerate, RayShear};
+use crate::sdk::{Child, PluginError, PrimSet};
+
+/// The `prim` of an entry that stands for a whole child.
+pub const WHOLE: u32 = u32::MAX;
+
+/// One primitive of the table: which child, which of its primitives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrimRef {
+    /// The child's slot (the order of `add_child`).
+    pub child: u32,
+    /// The primitive within the child, or [`WHOLE`].
+    pub prim: u32,
+}
+
+impl PrimRef {
+    /// The tie-rule key: lower wins at equal `t`.
+    #[inline]
+    fn key(self) -> u64 {
+        ((self.child as u64) << 32) | self.prim as u64
+    }
+}
+
+/// How a child is queried.
+#[derive(Clone, Copy)]
+enum Source {
+    Triangles,
+    Set(PrimSet),
+    Whole,
+}
+
+/// A nearest-hit query in progress: the ray (its `t_max` narrowed to the best
+/// hit so far) and the best hit's tie-rule key.
+pub struct Nearest {
+    /// The ray; `t_max` is the best hit's `t` once one is found.
+    pub ray: Ray,
+    best: u64,
+    /// The ray's shear for the triangle test, computed once.
+    shear: RayShear<f32>,
+}
+
+impl Nearest {
+    /// A query over `(ray.t_min, ray.t_max)` with nothing found yet.
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        Nearest {
+            ray: *ray,
+            best: u64::MAX,
+            shear: RayShear::new(ray.origin.to_array(), ray.dir.to_array()),
+        }
+    }
+
+    /// A hit was accepted.
+    #[inline]
+    pub fn found(&self) -> bool {
+        self.best != u64::MAX
+    }
+
+    /// The exclusive upper end to test a primitive of key `key` against: one
+    /// ulp above the best `t` for a lower key (a tie goes to it), the best `t`
+    /// otherwise.
+    #[inline]
+    fn limit(&self, key: u64) -> f32 {
+        if self.found() && key < self.best {
+            self.ray.t_max.next_up()
+        } else {
+            self.ray.t_max
+        }
+    }
+}
+
+/// The primitives of an aggregate's children.
+pub struct Primitives {
+    children: Vec<Child>,
+    sources: Vec<Source>,
+    refs: Vec<PrimRef>,
+    /// The three vertices of each triangle entry, parallel to `refs`
+    /// (zeros for other entries): the leaf's own layout, no index lookup.
+    tris: Vec<[[f32; 3]; 3]>,
+}
+
+/// What [`Primitives::gather`] returns besides the table: each primitive's box,
+/// in table order, for the structure to be built over.
+pub struct Gathered {
+    /// The table.
+    pub prims: Primitives,
+    /// Box of each primitive.
+    pub boxes: Vec<Bounds3>,
+}
+
+impl Primitives {
+    /// Gather the primitives of `children` (all prepared: their data is final).
+    pub fn gather(children: &[Child]) -> Result<Gathered, PluginError> {
+        let mut p = Primitives {
+            children: children.to_vec(),
+            sources: Vec::with_capacity(children.len()),
+            refs: Vec::new(),
+            tris: Vec::new(),
+        };
+        let mut boxes = Vec::new();
+        for (c, child) in children.iter().enumerate() {
+            let c = c as u32;
+            let source = match child.prim_set() {
+                Some(set) => match set.triangles()? {
+                    Some(t) => {
+                        for (i, ix) in t.indices.iter().enumerate() {
+                            let v = ix.map(|k| t.positions[k as usize]);
+                            // Never hit (T3): left out of the structure.
+                            if is_degenerate(&v) {
+                                continue;
+                            }
+                            boxes.push(tri_bounds(&v));
+                            p.refs.push(PrimRef {
+                                child: c,
+                                prim: i as u32,
+                            });
+                            p.tris.push(v);
+                        }
+                        Source::Triangles
+                    }
+                    None => {
+                        let n = set.count()?;
+                        let first = boxes.len();
+                        boxes.resize(first + n as usize, Bounds3::EMPTY);
+                        set.bounds(0, &mut boxes[first..])?;
+                        p.refs.extend((0..n).map(|i| PrimRef { child: c, prim: i }));
+                        p.tris.resize(boxes.len(), [[0.0; 3]; 3]);
+                        Source::Set(set)
+                    }
+                },
+                None => {
+                    boxes.push(child.bounds(0.0, 1.0)?);
+                    p.refs.push(PrimRef {
+                        child: c,
+                        prim: WHOLE,
+                    });
+                    p.tris.push([[0.0; 3]; 3]);
+                    Source::Whole
+                }
+            };
+            p.sources.push(source);
+        }
+        Ok(Gathered { prims: p, boxes })
+    }
+
+    /// Number of primitives.
+    pub fn len(&self) -> usize {
+        self.refs.len()
+    }
+
+    /// No primitives at all.
+    pub fn is_empty(&self) -> bool {
+        self.refs.is_empty()
+    }
+
+    /// The entry at `i`.
+    pub fn get(&self, i: usize) -> PrimRef {
+        self.refs[i]
+    }
+
+    /// Put the primitives in `order` (`order[k]` is the old index of the new
+    /// `k`-th): a structure whose leaves are ranges stores them contiguously.
+    pub fn reorder(&mut self, order: &[u32]) {
+        self.refs = order.iter().map(|&i| self.refs[i as usize]).collect();
+        self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
+    }
+
+    /// Bytes held, for the benchmarks' memory figures.
+    pub fn bytes(&self) -> usize {
+        self.refs.capacity() * std::mem::size_of::<PrimRef>()
+            + self.tris.capacity() * std::mem::size_of::<[[f32; 3]; 3]>()
+            + self.children.capacity() * std::mem::size_of::<Child>()
+    }
+
+    /// Nearest hit among the primitives `ids` (indices into the table),
+    /// recorded from `level` on when it beats `q`'s best. Primitives of a
+    /// primitive set that follow each other in `ids` go to the child in one
+    /// batched call.
+    #[inline]
+    pub fn intersect_ids(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &mut Nearest,
+        ids: impl Iterator<Item = usize>,
+        hit: &mut Hit,
+        level: u32,
+    ) {
+        let d = q.ray.dir.to_array();
+        let mut tests = 0u64;
+        let mut run = Run::default();
+        for i in ids {
+            tests += 1;
+            let r = self.refs[i];
+            match self.sources[r.child as usize] {
+                Source::Triangles => {
+                    let limit = q.limit(r.key());
+                    let h =
+                        intersect_triangle_sheared(&q.shear, d, self.tris[i], q.ray.t_min, limit);
+                    if let Some(h) = h {
+                        q.ray.t_max = h.t;
+                        q.best = r.key();
+                        hit.stack[level as usize] = HitEntry {
+                            index: r.child,
+                            prim: 0,
+                            uv: [0.0; 2],
+                        };
+                        hit.record_leaf(level + 1, h.t, r.prim, [h.b[1], h.b[2]]);
+                    }
+                }
+                Source::Set(_) => {
+                    if !run.push(r) {
+                        self.flush(ctx, q, &mut run, hit, level);
+                        run.push(r);
+                    }
+                }
+                Source::Whole => {
+                    self.flush(ctx, q, &mut run, hit, level);
+                    self.whole(ctx, q, r, hit, level);
+                }
+            }
+        }
+        self.flush(ctx, q, &mut run, hit, level);
+        ctx.stats.prim_tests += tests;
+    }
+
+    /// Query a run of one primitive set's primitives: those that win a tie
+    /// against the best so far first (with one ulp more), then the others.
+    fn flush(&self, ctx: &mut TraceCtx, q: &mut Nearest, run: &mut Run, hit: &mut Hit, level: u32) {
+        if run.len == 0 {
+            return;
+        }
+        let c = run.child;
+        let Source::Set(set) = self.sources[c as usize] else {
+            unreachable!("runs hold primitive-set entries only")
+        };
+        let key = |p: u32| PrimRef { child: c, prim: p }.key();
+        let ids = &run.prims[..run.len];
+        let (mut low, mut high) = ([0u32; RUN], [0u32; RUN]);
+        let (mut nl, mut nh) = (0, 0);
+        for &p in ids {
+            if q.found() && key(p) < q.best {
+                (low[nl], nl) = (p, nl + 1);
+            } else {
+                (high[nh], nh) = (p, nh + 1);
+            }
+        }
+        for (batch, equal_wins) in [(&low[..nl], true), (&high[..nh], false)] {
+            if batch.is_empty() {
+                continue;
+            }
+            let mut ray = q.ray;
+            if equal_wins {
+                ray.t_max = ray.t_max.next_up();
+            }
+            if set.intersect(ctx, &ray, batch, hit, level + 1) {
+                q.ray.t_max = hit.t;
+                q.best = key(hit.entry(level + 1).prim);
+                hit.record_child(level, c);
+            }
+        }
+        run.len = 0;
+    }
+
+    /// A whole child: its own answer, under the same tie rule by slot.
+    fn whole(&self, ctx: &mut TraceCtx, q: &mut Nearest, r: PrimRef, hit: &mut Hit, level: u32) {
+        let mut ray = q.ray;
+        ray.t_max = q.limit(r.key());
+        if self.children[r.child as usize].intersect(ctx, &ray, hit, level + 1) {
+            q.ray.t_max = hit.t;
+            q.best = r.key();
+            hit.record_child(level, r.child);
+        }
+    }
+
+    /// Any hit among the primitives `ids`.
+    #[inline]
+    pub fn occluded_ids(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        ids: impl Iterator<Item = usize>,
+        level: u32,
+    ) -> bool {
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let shear = RayShear::new(o, d);
+        let mut tests = 0u64;
+        let mut found = false;
+        for i in ids {
+            tests += 1;
+            let r = self.refs[i];
+            found = match self.sources[r.child as usize] {
+                Source::Triangles => {
+                    intersect_triangle_sheared(&shear, d, self.tris[i], ray.t_min, ray.t_max)
+                        .is_some()
+                }
+                Source::Set(set) => set.occluded(ctx, ray, &[r.prim], level + 1),
+                Source::Whole => self.children[r.child as usize].occluded(ctx, ray, level + 1),
+            };
+            if found {
+                break;
+            }
+        }
+        ctx.stats.prim_tests += tests;
+        found
+    }
+
+    /// Local geometry of a hit this table recorded at `level`.
+    #[inline]
+    pub fn local_geom(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        hit: &Hit,
+        level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        let c = hit.entry(level).index as usize;
+        self.children[c].local_geom(ctx, ray, hit, level + 1, mask, out);
+    }
+}
+
+/// Longest run of one primitive set's primitives sent in one call.
+const RUN: usize = 32;
+
+/// A run of one primitive set's primitives collected from a leaf.
+struct Run {
+    child: u32,
+    prims: [u32; RUN],
+    len: usize,
+}
+
+impl Default for Run {
+    fn default() -> Self {
+        Run {
+            child: 0,
+            prims: [0; RUN],
+            len: 0,
+        }
+    }
+}
+
+impl Run {
+    /// Add `r` if it continues the run (same child, room left).
+    #[inline]
+    fn push(&mut self, r: PrimRef) -> bool {
+        if self.len == 0 {
+            self.child = r.child;
+        } else if self.child != r.child || self.len == RUN {
+            return false;
+        }
+        self.prims[self.len] = r.prim;
+        self.len += 1;
+        true
+    }
+}
+
+/// Box of a triangle.
+#[inline]
+pub fn tri_bounds(v: &[[f32; 3]; 3]) -> Bounds3 {
+    Bounds3::EMPTY
+        .include(v[0].into())
+        .include(v[1].into())
+        .include(v[2].into())
+}
