@@ -1,5 +1,6 @@
 //! rtk's integration tests, one binary (ripgrep's layout): each module a topic.
 
+mod aggregates;
 mod bad_scenes;
 mod dropin;
 mod hygiene;

@@ -45,6 +45,33 @@ impl Mailbox {
         true
     }
 
+    /// Call `f` with the primitives of `ids` that query `q` has not met yet
+    /// on this thread (marking them), in batches on the stack: no
+    /// allocation. Stops early, returning false, when `f` does.
+    #[inline]
+    pub fn fresh(
+        &self,
+        ctx: &mut TraceCtx,
+        q: u64,
+        ids: &[u32],
+        mut f: impl FnMut(&mut TraceCtx, &[u32]) -> bool,
+    ) -> bool {
+        let mut batch = [0u32; 64];
+        for chunk in ids.chunks(batch.len()) {
+            let mut n = 0;
+            for &i in chunk {
+                if self.first_visit(ctx, q, i as usize) {
+                    batch[n] = i;
+                    n += 1;
+                }
+            }
+            if n > 0 && !f(ctx, &batch[..n]) {
+                return false;
+            }
+        }
+        true
+    }
+
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         self.marks.capacity() * 8

@@ -1,0 +1,285 @@
+#![doc = include_str!("../README.md")]
+
+use rtk_kernel::accel::{Mailbox, Nearest, Primitives};
+use rtk_kernel::geom::RayBoxPrecomp;
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::*;
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {
+    #[serde(default = "eight")]
+    max_leaf: u32,
+    #[serde(default = "sixteen")]
+    max_depth: u32,
+}
+
+fn eight() -> u32 {
+    8
+}
+fn sixteen() -> u32 {
+    16
+}
+
+/// Deepest octree ever built: the traversal stack is sized from it.
+const DEPTH_LIMIT: usize = 24;
+/// At most seven siblings wait on the stack per level.
+const STACK: usize = 7 * DEPTH_LIMIT + 1;
+
+/// A cell: inner (its eight children are `first..first + 8`) or a leaf
+/// (`ids[first..first + count]`).
+struct Cell {
+    bounds: Bounds3,
+    first: u32,
+    count: u32,
+    leaf: bool,
+}
+
+struct Tree {
+    cells: Vec<Cell>,
+    ids: Vec<u32>,
+}
+
+struct Octree {
+    children: Vec<Child>,
+    max_leaf: usize,
+    max_depth: usize,
+    built: Option<(Primitives, Tree, Mailbox)>,
+}
+
+impl Plugin for Octree {
+    type Params = Params;
+
+    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+        if !(1..=1024).contains(&p.max_leaf) {
+            return Err(PluginError::key("max_leaf", "must be between 1 and 1024"));
+        }
+        if !(1..=DEPTH_LIMIT as u32).contains(&p.max_depth) {
+            return Err(PluginError::key("max_depth", "must be between 1 and 24"));
+        }
+        Ok(Octree {
+            children: Vec::new(),
+            max_leaf: p.max_leaf as usize,
+            max_depth: p.max_depth as usize,
+            built: None,
+        })
+    }
+}
+
+/// The octant `k` (bit 0: upper x half, bit 1: y, bit 2: z) of a box.
+fn octant(b: &Bounds3, k: usize) -> Bounds3 {
+    let (lo, hi) = (b.min.v(), b.max.v());
+    let mid = (lo + hi) * 0.5;
+    let pick = |bit: usize, a: usize| -> (f32, f32) {
+        if k & bit != 0 {
+            (mid[a], hi[a])
+        } else {
+            (lo[a], mid[a])
+        }
+    };
+    let (x, y, z) = (pick(1, 0), pick(2, 1), pick(4, 2));
+    Bounds3::new(Vec3::new(x.0, y.0, z.0), Vec3::new(x.1, y.1, z.1))
+}
+
+/// Do the boxes overlap, `b` grown by a thousandth of `cell`'s size?
+fn overlaps(cell: &Bounds3, b: &Bounds3) -> bool {
+    let m = (cell.max.v() - cell.min.v()) * 1e-3;
+    let (lo, hi) = (b.min.v() - m, b.max.v() + m);
+    !b.is_empty() && lo.cmple(cell.max.v()).all() && hi.cmpge(cell.min.v()).all()
+}
+
+struct Builder<'a> {
+    boxes: &'a [Bounds3],
+    max_leaf: usize,
+    max_depth: usize,
+    tree: Tree,
+}
+
+impl Builder<'_> {
+    /// Fill cell `at` (its box set) with `ids` at `depth`.
+    fn cell(&mut self, at: usize, ids: Vec<u32>, depth: usize) {
+        let bounds = self.tree.cells[at].bounds;
+        if ids.len() > self.max_leaf && depth < self.max_depth {
+            let parts: Vec<Vec<u32>> = (0..8)
+                .map(|k| {
+                    let ob = octant(&bounds, k);
+                    ids.iter().copied().filter(|&i| overlaps(&ob, &self.boxes[i as usize])).collect()
+                })
+                .collect();
+            // Split only if some octant holds fewer primitives than the cell.
+            if parts.iter().any(|p| p.len() < ids.len()) {
+                let first = self.tree.cells.len();
+                for k in 0..8 {
+                    self.tree.cells.push(Cell {
+                        bounds: octant(&bounds, k),
+                        first: 0,
+                        count: 0,
+                        leaf: true,
+                    });
+                }
+                self.tree.cells[at] = Cell {
+                    bounds,
+                    first: first as u32,
+                    count: 8,
+                    leaf: false,
+                };
+                for (k, p) in parts.into_iter().enumerate() {
+                    self.cell(first + k, p, depth + 1);
+                }
+                return;
+            }
+        }
+        let c = &mut self.tree.cells[at];
+        c.first = self.tree.ids.len() as u32;
+        c.count = ids.len() as u32;
+        self.tree.ids.extend(ids);
+    }
+}
+
+impl Tree {
+    /// Visit the leaves the ray crosses, nearest octant first; `leaf(ids)`
+    /// returns the best `t` so far, or `None` to stop. Octants entered beyond
+    /// the best `t` are skipped (one entered exactly at it is still visited:
+    /// a tie may be won there).
+    #[inline]
+    fn walk(&self, ray: &Ray, node_tests: &mut u64, mut leaf: impl FnMut(&[u32]) -> Option<f32>) {
+        let pre = RayBoxPrecomp::new(ray);
+        let Some(root) = pre.intersect(&self.cells[0].bounds, ray.t_min, ray.t_max) else {
+            return;
+        };
+        let mut best = ray.t_max;
+        let mut stack = [(0u32, 0f32); STACK];
+        stack[0] = (0, root.t0);
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (n, t_entry) = stack[sp];
+            if t_entry > best {
+                continue;
+            }
+            *node_tests += 1;
+            let c = &self.cells[n as usize];
+            if c.leaf {
+                let ids = &self.ids[c.first as usize..(c.first + c.count) as usize];
+                if !ids.is_empty() {
+                    match leaf(ids) {
+                        Some(t) => best = t,
+                        None => return,
+                    }
+                }
+                continue;
+            }
+            let mut kids = [(0u32, 0f32); 8];
+            let mut k = 0;
+            for i in 0..8 {
+                let child = c.first + i;
+                if let Some(h) = pre.intersect(&self.cells[child as usize].bounds, ray.t_min, best) {
+                    kids[k] = (child, h.t0);
+                    k += 1;
+                }
+            }
+            // Farthest first on the stack, so the nearest is popped next.
+            let kids = &mut kids[..k];
+            kids.sort_unstable_by(|a, b| b.1.total_cmp(&a.1));
+            for &e in kids.iter() {
+                stack[sp] = e;
+                sp += 1;
+            }
+        }
+    }
+}
+
+impl Object for Octree {
+    fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
+        self.children.push(child);
+        Ok(())
+    }
+
+    fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
+        let g = Primitives::gather(&self.children)?;
+        let bounds = g.boxes.iter().fold(Bounds3::EMPTY, |a, b| a.union(*b));
+        let mut b = Builder {
+            boxes: &g.boxes,
+            max_leaf: self.max_leaf,
+            max_depth: self.max_depth,
+            tree: Tree {
+                cells: vec![Cell {
+                    bounds,
+                    first: 0,
+                    count: 0,
+                    leaf: true,
+                }],
+                ids: Vec::new(),
+            },
+        };
+        b.cell(0, (0..g.boxes.len() as u32).collect(), 0);
+        let mailbox = Mailbox::new(g.prims.len(), env.max_threads());
+        self.built = Some((g.prims, b.tree, mailbox));
+        Ok(())
+    }
+
+    fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
+        self.built.as_ref().map_or(Bounds3::EMPTY, |(_, t, _)| t.cells[0].bounds)
+    }
+
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
+        let Some((prims, tree, mailbox)) = &self.built else {
+            return false;
+        };
+        let mut q = Nearest::new(ray);
+        let query = Mailbox::query(ctx);
+        let mut nodes = 0;
+        tree.walk(ray, &mut nodes, |ids| {
+            mailbox.fresh(ctx, query, ids, |ctx, fresh| {
+                let fresh = fresh.iter().map(|&i| i as usize);
+                prims.intersect_ids(ctx, &mut q, fresh, hit, level);
+                true
+            });
+            Some(q.ray.t_max)
+        });
+        ctx.stats.node_tests += nodes;
+        q.found()
+    }
+
+    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, level: u32) -> bool {
+        let Some((prims, tree, mailbox)) = &self.built else {
+            return false;
+        };
+        let query = Mailbox::query(ctx);
+        let mut found = false;
+        let mut nodes = 0;
+        tree.walk(ray, &mut nodes, |ids| {
+            mailbox.fresh(ctx, query, ids, |ctx, fresh| {
+                found = prims.occluded_ids(ctx, ray, fresh.iter().map(|&i| i as usize), level);
+                !found
+            });
+            (!found).then_some(ray.t_max)
+        });
+        ctx.stats.node_tests += nodes;
+        found
+    }
+
+    fn local_geom(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        hit: &Hit,
+        level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        if let Some((prims, _, _)) = &self.built {
+            prims.local_geom(ctx, ray, hit, level, mask, out);
+        }
+    }
+}
+
+impl FlattensPrimitives for Octree {}
+
+rtk_kernel::export_object!(
+    Octree,
+    class = "octree",
+    doc = include_str!("../README.md"),
+    capabilities = [FlattensPrimitives]
+);

@@ -1,0 +1,232 @@
+//! Every aggregate returns exactly the `list`'s answer: nearest hit (t,
+//! primitive, barycentrics) and any-hit, ray for ray, on randomized scenes of
+//! spheres and triangle meshes (overlapping, coplanar, shared edges,
+//! degenerate triangles, coincident copies, transformed instances, a nested
+//! aggregate) and adversarial rays (axis-parallel, ±0 components, along cell
+//! boundaries, from box corners and faces). Through the real binary:
+//! `rtk trace --rays FILE --aggregate CLASS --out HITS` (docs/trace.md).
+
+use rtk_tests::*;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The aggregates that must match the list (every one that is built).
+const AGGREGATES: &[&str] = &["bvh", "grid", "octree"];
+
+/// A random scene; `inner` is the class of the nested cluster.
+fn scene(seed: u64, dir: &Path, inner: &str) -> String {
+    let mut r = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let mut s = String::from(
+        "[render]\nroot = \"world\"\nintegrator = \"normals\"\n[cameras.c]\nclass = \"pinhole\"\n",
+    );
+    let mut children = Vec::new();
+    // Spheres, some overlapping, two exact duplicates (ties between children).
+    for i in 0..40 {
+        let c = [r.f(-8.0, 8.0), r.f(-8.0, 8.0), r.f(-8.0, 8.0)];
+        let rad = r.f(0.1, 1.5);
+        writeln!(s, "[objects.s{i}]\nclass = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {rad}", c[0], c[1], c[2]).unwrap();
+        children.push(format!("\"s{i}\""));
+    }
+    children.push("\"s3\"".into());
+    children.push("\"s3\"".into());
+    // Meshes: random soup (with degenerate and duplicated triangles), a grid
+    // of coplanar quads sharing edges on integer coordinates, a closed box.
+    for (m, text) in [soup(&mut r), plane_grid(), box_mesh()].iter().enumerate() {
+        std::fs::write(dir.join(format!("m{m}.obj")), text).unwrap();
+        writeln!(s, "[objects.m{m}]\nclass = \"mesh\"\nfile = \"m{m}.obj\"\naccel = \"none\"").unwrap();
+        children.push(format!("\"m{m}\""));
+    }
+    // Transformed instances of a mesh and a sphere.
+    children.push("{ object = \"m2\", transform = [{ scale = 0.5 }, { rotate_y = 30.0 }, { translate = [3.0, 1.0, -2.0] }] }".into());
+    children.push("{ object = \"s5\", transform = [{ translate = [0.0, 0.0, 4.0] }] }".into());
+    // A nested cluster of the class under test.
+    writeln!(s, "[objects.cluster]\nclass = \"{inner}\"\nchildren = [\"s1\", \"s2\", \"m1\", {{ object = \"m0\", transform = [{{ translate = [1.0, 2.0, 3.0] }}] }}]").unwrap();
+    children.push("\"cluster\"".into());
+    writeln!(s, "[objects.world]\nclass = \"list\"\nchildren = [{}]", children.join(", ")).unwrap();
+    s
+}
+
+/// splitmix64: the tests' own generator (the test crate links no kernel).
+struct Rng(u64);
+impl Rng {
+    fn u(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn f(&mut self, lo: f64, hi: f64) -> f32 {
+        (lo + (hi - lo) * self.u()) as f32
+    }
+}
+
+fn soup(r: &mut Rng) -> String {
+    let mut s = String::new();
+    let mut n = 0;
+    for t in 0..300 {
+        let c = [r.f(-8.0, 8.0), r.f(-8.0, 8.0), r.f(-8.0, 8.0)];
+        for _ in 0..3 {
+            writeln!(s, "v {} {} {}", c[0] + r.f(-1.5, 1.5), c[1] + r.f(-1.5, 1.5), c[2] + r.f(-1.5, 1.5)).unwrap();
+        }
+        writeln!(s, "f {} {} {}", n + 1, n + 2, n + 3).unwrap();
+        if t % 50 == 0 {
+            // The same triangle again (a tie within the mesh) and a degenerate one.
+            writeln!(s, "f {} {} {}", n + 1, n + 2, n + 3).unwrap();
+            writeln!(s, "f {} {} {}", n + 1, n + 1, n + 2).unwrap();
+        }
+        n += 3;
+    }
+    s
+}
+
+/// 8x8 unit quads in the plane y = 0 on integer coordinates: every edge
+/// shared, every vertex on a cell boundary of any grid with integer cells.
+fn plane_grid() -> String {
+    let mut s = String::new();
+    for j in 0..=8 {
+        for i in 0..=8 {
+            writeln!(s, "v {} 0 {}", i - 4, j - 4).unwrap();
+        }
+    }
+    for j in 0..8 {
+        for i in 0..8 {
+            let a = j * 9 + i + 1;
+            writeln!(s, "f {} {} {}\nf {} {} {}", a, a + 1, a + 10, a, a + 10, a + 9).unwrap();
+        }
+    }
+    s
+}
+
+fn box_mesh() -> String {
+    "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
+     f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n"
+        .into()
+}
+
+/// Rays: random, and adversarial.
+fn rays(seed: u64) -> Vec<[f32; 8]> {
+    let mut r = Rng(seed ^ 0xABCD_EF01);
+    let mut out = Vec::new();
+    for k in 0..6000 {
+        let mut o = [r.f(-12.0, 12.0), r.f(-12.0, 12.0), r.f(-12.0, 12.0)];
+        let mut d = [r.f(-1.0, 1.0), r.f(-1.0, 1.0), r.f(-1.0, 1.0)];
+        match k % 6 {
+            // Axis-parallel, with ±0 in the other components.
+            1 => d = [[1.0, 0.0, -0.0], [0.0, -1.0, 0.0], [-0.0, 0.0, 1.0]][k % 3],
+            // Along cell boundaries: integer origins, axis-parallel.
+            2 => {
+                o = o.map(|x| x.round());
+                d = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]][(k / 6) % 3];
+            }
+            // In the plane of the quads, at grazing incidence.
+            3 => {
+                o[1] = 0.0;
+                d[1] = 0.0;
+            }
+            // From a corner or a face of the closed box.
+            4 => {
+                o = [[-1.0, -1.0, -1.0], [1.0, 0.3, -0.2], [0.0, 1.0, 0.5]][k % 3];
+            }
+            _ => {}
+        }
+        if d.iter().all(|&x| x == 0.0) {
+            d = [0.0, 0.0, 1.0];
+        }
+        let t_max = if k % 7 == 0 { r.f(0.5, 10.0) } else { f32::INFINITY };
+        out.push([o[0], o[1], o[2], d[0], d[1], d[2], 0.0, t_max]);
+    }
+    out
+}
+
+fn write_rays(p: &Path, rays: &[[f32; 8]]) {
+    let bytes: Vec<u8> = rays.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    std::fs::write(p, bytes).unwrap();
+}
+
+/// Trace with the root of class `class`; returns the hit file's bytes.
+fn trace(dir: &Path, scene: &Path, rays: &Path, class: &str, occluded: bool) -> Vec<u8> {
+    let out = dir.join(format!("hits-{class}-{occluded}.bin"));
+    let mut args = vec![
+        "trace",
+        scene.to_str().unwrap(),
+        "--rays",
+        rays.to_str().unwrap(),
+        "--aggregate",
+        class,
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        "2",
+        "--json",
+    ];
+    if occluded {
+        args.push("--occluded");
+    }
+    let run = Run::from(rtk(&args).output().unwrap());
+    assert!(run.ok, "{class}: {}", run.stderr);
+    std::fs::read(out).unwrap()
+}
+
+/// The mismatching rays of two hit files, described.
+fn mismatches(a: &[u8], b: &[u8]) -> Vec<String> {
+    a.chunks(16)
+        .zip(b.chunks(16))
+        .enumerate()
+        .filter(|(_, (x, y))| x != y)
+        .map(|(i, (x, y))| format!("ray {i}: list {x:?} vs {y:?}"))
+        .collect()
+}
+
+fn check(seed: u64, class: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    // The oracle is all lists; the other scene has `class` at the root and
+    // in the nested cluster.
+    let oracle = dir.path().join("list.toml");
+    std::fs::write(&oracle, scene(seed, dir.path(), "list")).unwrap();
+    let sp = dir.path().join("scene.toml");
+    std::fs::write(&sp, scene(seed, dir.path(), class)).unwrap();
+    let rp = dir.path().join("rays.bin");
+    write_rays(&rp, &rays(seed));
+    for occluded in [false, true] {
+        let want = trace(dir.path(), &oracle, &rp, "list", occluded);
+        let got = trace(dir.path(), &sp, &rp, class, occluded);
+        assert_eq!(want.len(), got.len());
+        let m = mismatches(&want, &got);
+        assert!(m.is_empty(), "{class} (occluded {occluded}, seed {seed}): {} mismatches, e.g. {:?}", m.len(), &m[..m.len().min(5)]);
+    }
+}
+
+#[test]
+fn every_aggregate_matches_the_list() {
+    let avail = rtk_plugins_available();
+    for class in AGGREGATES {
+        assert!(avail.contains(&class.to_string()), "aggregate `{class}` is not built");
+        for seed in [1, 2] {
+            check(seed, class);
+        }
+    }
+}
+
+/// Long randomized run: `cargo test --release -p rtk-tests -- --ignored aggregates_long`.
+#[test]
+#[ignore]
+fn aggregates_long_randomized() {
+    for class in AGGREGATES {
+        for seed in 10..60 {
+            check(seed, class);
+        }
+    }
+}
+
+/// The classes in the build folder.
+fn rtk_plugins_available() -> Vec<String> {
+    std::fs::read_dir(bin_dir())
+        .unwrap()
+        .flatten()
+        .filter_map(|e| {
+            let n = e.file_name().to_string_lossy().into_owned();
+            n.strip_prefix("librtk_")?.strip_suffix(".so").map(str::to_string)
+        })
+        .collect()
+}
