@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// The aggregates that must match the list (every one that is built).
-const AGGREGATES: &[&str] = &["bvh", "grid", "octree"];
+const AGGREGATES: &[&str] = &["bvh", "grid", "octree", "kdtree"];
 
 /// A random scene; `inner` is the class of the nested cluster.
 fn scene(seed: u64, dir: &Path, inner: &str) -> String {
@@ -24,7 +24,12 @@ fn scene(seed: u64, dir: &Path, inner: &str) -> String {
     for i in 0..40 {
         let c = [r.f(-8.0, 8.0), r.f(-8.0, 8.0), r.f(-8.0, 8.0)];
         let rad = r.f(0.1, 1.5);
-        writeln!(s, "[objects.s{i}]\nclass = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {rad}", c[0], c[1], c[2]).unwrap();
+        writeln!(
+            s,
+            "[objects.s{i}]\nclass = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {rad}",
+            c[0], c[1], c[2]
+        )
+        .unwrap();
         children.push(format!("\"s{i}\""));
     }
     children.push("\"s3\"".into());
@@ -33,7 +38,11 @@ fn scene(seed: u64, dir: &Path, inner: &str) -> String {
     // of coplanar quads sharing edges on integer coordinates, a closed box.
     for (m, text) in [soup(&mut r), plane_grid(), box_mesh()].iter().enumerate() {
         std::fs::write(dir.join(format!("m{m}.obj")), text).unwrap();
-        writeln!(s, "[objects.m{m}]\nclass = \"mesh\"\nfile = \"m{m}.obj\"\naccel = \"none\"").unwrap();
+        writeln!(
+            s,
+            "[objects.m{m}]\nclass = \"mesh\"\nfile = \"m{m}.obj\"\naccel = \"none\""
+        )
+        .unwrap();
         children.push(format!("\"m{m}\""));
     }
     // Transformed instances of a mesh and a sphere.
@@ -42,7 +51,12 @@ fn scene(seed: u64, dir: &Path, inner: &str) -> String {
     // A nested cluster of the class under test.
     writeln!(s, "[objects.cluster]\nclass = \"{inner}\"\nchildren = [\"s1\", \"s2\", \"m1\", {{ object = \"m0\", transform = [{{ translate = [1.0, 2.0, 3.0] }}] }}]").unwrap();
     children.push("\"cluster\"".into());
-    writeln!(s, "[objects.world]\nclass = \"list\"\nchildren = [{}]", children.join(", ")).unwrap();
+    writeln!(
+        s,
+        "[objects.world]\nclass = \"list\"\nchildren = [{}]",
+        children.join(", ")
+    )
+    .unwrap();
     s
 }
 
@@ -67,7 +81,14 @@ fn soup(r: &mut Rng) -> String {
     for t in 0..300 {
         let c = [r.f(-8.0, 8.0), r.f(-8.0, 8.0), r.f(-8.0, 8.0)];
         for _ in 0..3 {
-            writeln!(s, "v {} {} {}", c[0] + r.f(-1.5, 1.5), c[1] + r.f(-1.5, 1.5), c[2] + r.f(-1.5, 1.5)).unwrap();
+            writeln!(
+                s,
+                "v {} {} {}",
+                c[0] + r.f(-1.5, 1.5),
+                c[1] + r.f(-1.5, 1.5),
+                c[2] + r.f(-1.5, 1.5)
+            )
+            .unwrap();
         }
         writeln!(s, "f {} {} {}", n + 1, n + 2, n + 3).unwrap();
         if t % 50 == 0 {
@@ -92,7 +113,17 @@ fn plane_grid() -> String {
     for j in 0..8 {
         for i in 0..8 {
             let a = j * 9 + i + 1;
-            writeln!(s, "f {} {} {}\nf {} {} {}", a, a + 1, a + 10, a, a + 10, a + 9).unwrap();
+            writeln!(
+                s,
+                "f {} {} {}\nf {} {} {}",
+                a,
+                a + 1,
+                a + 10,
+                a,
+                a + 10,
+                a + 9
+            )
+            .unwrap();
         }
     }
     s
@@ -133,14 +164,22 @@ fn rays(seed: u64) -> Vec<[f32; 8]> {
         if d.iter().all(|&x| x == 0.0) {
             d = [0.0, 0.0, 1.0];
         }
-        let t_max = if k % 7 == 0 { r.f(0.5, 10.0) } else { f32::INFINITY };
+        let t_max = if k % 7 == 0 {
+            r.f(0.5, 10.0)
+        } else {
+            f32::INFINITY
+        };
         out.push([o[0], o[1], o[2], d[0], d[1], d[2], 0.0, t_max]);
     }
     out
 }
 
 fn write_rays(p: &Path, rays: &[[f32; 8]]) {
-    let bytes: Vec<u8> = rays.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let bytes: Vec<u8> = rays
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
     std::fs::write(p, bytes).unwrap();
 }
 
@@ -193,7 +232,12 @@ fn check(seed: u64, class: &str) {
         let got = trace(dir.path(), &sp, &rp, class, occluded);
         assert_eq!(want.len(), got.len());
         let m = mismatches(&want, &got);
-        assert!(m.is_empty(), "{class} (occluded {occluded}, seed {seed}): {} mismatches, e.g. {:?}", m.len(), &m[..m.len().min(5)]);
+        assert!(
+            m.is_empty(),
+            "{class} (occluded {occluded}, seed {seed}): {} mismatches, e.g. {:?}",
+            m.len(),
+            &m[..m.len().min(5)]
+        );
     }
 }
 
@@ -201,7 +245,10 @@ fn check(seed: u64, class: &str) {
 fn every_aggregate_matches_the_list() {
     let avail = rtk_plugins_available();
     for class in AGGREGATES {
-        assert!(avail.contains(&class.to_string()), "aggregate `{class}` is not built");
+        assert!(
+            avail.contains(&class.to_string()),
+            "aggregate `{class}` is not built"
+        );
         for seed in [1, 2] {
             check(seed, class);
         }
@@ -226,7 +273,76 @@ fn rtk_plugins_available() -> Vec<String> {
         .flatten()
         .filter_map(|e| {
             let n = e.file_name().to_string_lossy().into_owned();
-            n.strip_prefix("librtk_")?.strip_suffix(".so").map(str::to_string)
+            n.strip_prefix("librtk_")?
+                .strip_suffix(".so")
+                .map(str::to_string)
         })
         .collect()
+}
+
+/// Swapping the bunny scene's root aggregate and the meshes' `accel` among
+/// the aggregates gives the same image, bit for bit.
+#[test]
+fn swapping_aggregates_leaves_the_bunny_image_unchanged() {
+    let scene = root().join("scenes/bunny.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let render = |root_class: &str, accel: &str| {
+        let sets = [
+            format!("objects.world.class={root_class}"),
+            format!("objects.bunny.accel={accel}"),
+            format!("objects.floor.accel={accel}"),
+            "render.width=96".into(),
+            "render.height=72".into(),
+        ];
+        let mut args = Vec::new();
+        for s in &sets {
+            args.push("--set");
+            args.push(s.as_str());
+        }
+        let (run, img) = render_file(&scene, dir.path(), &args);
+        assert!(run.ok, "{root_class}/{accel}: {}", run.stderr);
+        img.unwrap()
+    };
+    let reference = render("list", "none");
+    assert!(reference.data.iter().any(|&v| v > 0.0));
+    let mut classes: Vec<&str> = AGGREGATES.to_vec();
+    classes.push("list");
+    for root_class in &classes {
+        for accel in AGGREGATES {
+            let img = render(root_class, accel);
+            assert!(
+                img == reference,
+                "root {root_class}, accel {accel}: the image differs"
+            );
+        }
+    }
+}
+
+/// The meta-hierarchy of `scenes/nested.toml` (an octree of grids of
+/// kd-trees and bvh-wrapped meshes) renders exactly what flat lists render.
+#[test]
+fn nested_aggregates_render_what_flat_lists_render() {
+    let scene = root().join("scenes/nested.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let small = ["--set", "render.width=128", "--set", "render.height=80"];
+    let (run, nested) = render_file(&scene, dir.path(), &small);
+    assert!(run.ok, "{}", run.stderr);
+    let mut flat_args = small.to_vec();
+    for s in [
+        "objects.field.class=list",
+        "objects.cluster.class=list",
+        "objects.balls.class=list",
+        "objects.bunny.accel=none",
+        "objects.ground.accel=none",
+    ] {
+        flat_args.extend(["--set", s]);
+    }
+    let (run, flat) = render_file(&scene, dir.path(), &flat_args);
+    assert!(run.ok, "{}", run.stderr);
+    let (nested, flat) = (nested.unwrap(), flat.unwrap());
+    assert!(nested.data.iter().any(|&v| v > 0.0));
+    assert!(
+        nested == flat,
+        "the nested hierarchy's image differs from the flat one"
+    );
 }

@@ -17,7 +17,6 @@
 //! from that bound, never overflows and never drops a node.
 
 use crate::abi::{Bounds3, Ray};
-use crate::geom::gamma;
 use glam::Vec3;
 use std::ops::Range;
 
@@ -210,53 +209,83 @@ impl Bvh4 {
         }
         let pre = Precomp::new(ray);
         let mut t_max = t_max;
-        // (reference, entry distance); a reference is a node index, or a
-        // leaf as (node << 2 | slot) with the top bit set.
         let mut stack = Stack::new();
-        stack.push((0, ray.t_min));
-        while let Some((r, t_entry)) = stack.pop() {
-            if t_entry > t_max {
-                continue;
-            }
-            if r & LEAF != 0 {
-                let (n, slot) = ((r & !LEAF) >> 2, (r & 3) as usize);
+        // The node or leaf being visited: a node index, or a leaf as
+        // (node << 2 | slot) with the top bit set.
+        let mut cur = 0u32;
+        loop {
+            if cur & LEAF != 0 {
+                let (n, slot) = ((cur & !LEAF) >> 2, (cur & 3) as usize);
                 let node = &self.nodes[n as usize];
                 let first = node.first[slot] as usize;
                 match leaf(first..first + node.count[slot] as usize) {
                     Some(t) => t_max = t,
                     None => return,
                 }
-                continue;
-            }
-            let node = &self.nodes[r as usize];
-            *node_tests += 1;
-            let (mask, t_near) = pre.test4(node, ray.t_min, t_max);
-            // Push the hit children farthest first, so the nearest is popped next.
-            let mut kids = [(0u32, 0f32); 4];
-            let mut n = 0;
-            for (slot, &t_near) in t_near.iter().enumerate() {
-                if mask & (1 << slot) != 0 {
-                    let child = if node.count[slot] == 0 {
-                        node.first[slot]
-                    } else {
-                        LEAF | (r << 2) | slot as u32
-                    };
-                    kids[n] = (child, t_near);
-                    n += 1;
+            } else {
+                let node = &self.nodes[cur as usize];
+                *node_tests += 1;
+                let (mask, t_near) = pre.test4(node, ray.t_min, t_max);
+                if mask != 0 {
+                    cur = self.descend(node, cur, mask, &t_near, &mut stack);
+                    continue;
                 }
             }
-            // Insertion sort of at most four, farthest first.
-            for i in 1..n {
-                let mut j = i;
-                while j > 0 && kids[j - 1].1 < kids[j].1 {
-                    kids.swap(j - 1, j);
-                    j -= 1;
+            // Next: the nearest deferred child not beyond the best hit.
+            loop {
+                let Some((r, t_entry)) = stack.pop() else {
+                    return;
+                };
+                if t_entry <= t_max {
+                    cur = r;
+                    break;
                 }
-            }
-            for &k in &kids[..n] {
-                stack.push(k);
             }
         }
+    }
+
+    /// Of the children in `mask`, return the nearest and defer the others
+    /// (farthest pushed first, so they come back nearest first).
+    #[inline(always)]
+    fn descend(
+        &self,
+        node: &Node4,
+        at: u32,
+        mask: u32,
+        t_near: &[f32; 4],
+        stack: &mut Stack,
+    ) -> u32 {
+        let child = |slot: usize| {
+            if node.count[slot] == 0 {
+                node.first[slot]
+            } else {
+                LEAF | (at << 2) | slot as u32
+            }
+        };
+        if mask.count_ones() == 1 {
+            return child(mask.trailing_zeros() as usize);
+        }
+        let mut kids = [(0u32, 0f32); 4];
+        let mut n = 0;
+        let mut m = mask;
+        while m != 0 {
+            let slot = m.trailing_zeros() as usize;
+            m &= m - 1;
+            kids[n] = (child(slot), t_near[slot]);
+            n += 1;
+        }
+        // Insertion sort of at most four, farthest first.
+        for i in 1..n {
+            let mut j = i;
+            while j > 0 && kids[j - 1].1 < kids[j].1 {
+                kids.swap(j - 1, j);
+                j -= 1;
+            }
+        }
+        for &k in &kids[..n - 1] {
+            stack.push(k);
+        }
+        kids[n - 1].0
     }
 }
 
@@ -341,7 +370,7 @@ impl Builder<'_> {
         let cb = ids.iter().fold(Bounds3::EMPTY, |b, &i| {
             b.include(self.centroids[i as usize])
         });
-        let mid = match self.sah(ids, &cb) {
+        let mid = match self.sah(ids, &cb, area(&bounds)) {
             Some(s) if s.cost < self.leaf_cost(ids.len()) || ids.len() > self.params.max_leaf => {
                 self.partition(ids, &cb, &s)
             }
@@ -364,12 +393,8 @@ impl Builder<'_> {
     }
 
     /// The cheapest binned split, if the centroids spread over more than one bin.
-    fn sah(&self, ids: &[u32], cb: &Bounds3) -> Option<Split> {
+    fn sah(&self, ids: &[u32], cb: &Bounds3, parent: f32) -> Option<Split> {
         let ext = cb.max.v() - cb.min.v();
-        let parent = area(
-            &ids.iter()
-                .fold(Bounds3::EMPTY, |b, &i| b.union(self.boxes[i as usize])),
-        );
         let mut best: Option<Split> = None;
         for axis in 0..3 {
             if !(ext[axis] > 0.0) {
@@ -443,10 +468,12 @@ struct Precomp {
     neg: [bool; 3],
 }
 
-/// Widening of the far distance that makes the slab test conservative.
-fn far_scale() -> f32 {
-    1.0 + 2.0 * gamma::<f32>(3)
-}
+/// Widening of the far distance that makes the slab test conservative:
+/// `1 + 2γ₃` (γ as in [`gamma`](crate::geom::gamma), computed at compile time).
+const FAR_SCALE: f32 = {
+    let ne = 3.0 * (f32::EPSILON * 0.5);
+    1.0 + 2.0 * (ne / (1.0 - ne))
+};
 
 impl Precomp {
     fn new(ray: &Ray) -> Self {
@@ -468,9 +495,7 @@ impl Precomp {
     fn test4(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
         #[cfg(target_arch = "x86_64")]
         {
-            // SAFETY: SSE and SSE2 are part of the x86_64 baseline: every
-            // x86_64 CPU runs them.
-            unsafe { self.test4_sse(n, t_min, t_max) }
+            self.test4_sse(n, t_min, t_max)
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
@@ -491,7 +516,7 @@ impl Precomp {
                     (n.lo[a][slot], n.hi[a][slot])
                 };
                 let tna = (near - self.o[a]) * self.inv[a];
-                let tfa = (far - self.o[a]) * self.inv[a] * far_scale();
+                let tfa = (far - self.o[a]) * self.inv[a] * FAR_SCALE;
                 // A NaN (0·∞) compares false and leaves the bound as it was.
                 if tna > t0 {
                     t0 = tna;
@@ -508,13 +533,26 @@ impl Precomp {
         (mask, tn)
     }
 
+    /// The SSE test. Not a `#[target_feature]` function (those are never
+    /// inlined into callers without the feature): SSE and SSE2 are part of
+    /// the x86_64 baseline, enabled for every function of the crate.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "sse,sse2")]
+    #[inline(always)]
     fn test4_sse(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
+        // SAFETY: every intrinsic in the body needs only SSE/SSE2, which
+        // every x86_64 CPU has (the target enables "sse2" for all code).
+        unsafe { self.test4_sse_body(n, t_min, t_max) }
+    }
+
+    /// # Safety
+    /// The CPU must have SSE2 (every x86_64 CPU does).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn test4_sse_body(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
         use std::arch::x86_64::*;
         let mut t0 = _mm_set1_ps(t_min);
         let mut t1 = _mm_set1_ps(t_max);
-        let scale = _mm_set1_ps(far_scale());
+        let scale = _mm_set1_ps(FAR_SCALE);
         for a in 0..3 {
             let (near, far) = if self.neg[a] {
                 (&n.hi[a], &n.lo[a])
@@ -523,8 +561,7 @@ impl Precomp {
             };
             let o = _mm_set1_ps(self.o[a]);
             let inv = _mm_set1_ps(self.inv[a]);
-            // SAFETY: each row is four floats (`Node4` is 64-byte aligned and
-            // its rows 16-byte aligned, but unaligned loads cost the same).
+            // SAFETY: each row is four floats.
             let (near, far) = unsafe { (_mm_loadu_ps(near.as_ptr()), _mm_loadu_ps(far.as_ptr())) };
             let tna = _mm_mul_ps(_mm_sub_ps(near, o), inv);
             let tfa = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(far, o), inv), scale);
@@ -640,6 +677,11 @@ mod tests {
         let bvh = Bvh4::build(&boxes, BuildParams::default());
         assert!(bvh.depth <= MAX_DEPTH, "{}", bvh.depth);
         check(&boxes, &bvh, 9);
+    }
+
+    #[test]
+    fn the_far_scale_is_one_plus_two_gamma_3() {
+        assert_eq!(FAR_SCALE, 1.0 + 2.0 * crate::geom::gamma::<f32>(3));
     }
 
     #[test]

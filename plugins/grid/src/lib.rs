@@ -69,11 +69,18 @@ impl Cells {
             (bounds.max.v() - bounds.min.v()).max(Vec3::splat(f32::MIN_POSITIVE))
         };
         let per_unit = density * (boxes.len().max(1) as f32).cbrt() / ext.max_element();
-        let mut res = (ext * per_unit).ceil().as_ivec3().clamp(rtk_kernel::glam::IVec3::ONE, rtk_kernel::glam::IVec3::splat(512));
+        let mut res = (ext * per_unit).ceil().as_ivec3().clamp(
+            rtk_kernel::glam::IVec3::ONE,
+            rtk_kernel::glam::IVec3::splat(512),
+        );
         while res.x as u64 * res.y as u64 * res.z as u64 > max_cells {
             res = (res / 2).max(rtk_kernel::glam::IVec3::ONE);
         }
-        let lo = if bounds.is_empty() { Vec3::ZERO } else { bounds.min.v() };
+        let lo = if bounds.is_empty() {
+            Vec3::ZERO
+        } else {
+            bounds.min.v()
+        };
         let mut c = Cells {
             res: res.to_array(),
             lo,
@@ -92,8 +99,12 @@ impl Cells {
             return None;
         }
         let margin = self.width * 1e-3;
-        let a = ((b.min.v() - margin - self.lo) / self.width).floor().as_ivec3();
-        let z = ((b.max.v() + margin - self.lo) / self.width).floor().as_ivec3();
+        let a = ((b.min.v() - margin - self.lo) / self.width)
+            .floor()
+            .as_ivec3();
+        let z = ((b.max.v() + margin - self.lo) / self.width)
+            .floor()
+            .as_ivec3();
         let top = rtk_kernel::glam::IVec3::from(self.res) - 1;
         let zero = rtk_kernel::glam::IVec3::ZERO;
         Some((a.clamp(zero, top).to_array(), z.clamp(zero, top).to_array()))
@@ -143,12 +154,7 @@ impl Cells {
     /// `cell(ids, t_exit)` tests a cell and returns the current best `t`, or
     /// `None` to stop; the walk stops once the next cell starts beyond it.
     #[inline]
-    fn walk(
-        &self,
-        ray: &Ray,
-        node_tests: &mut u64,
-        mut cell: impl FnMut(&[u32]) -> Option<f32>,
-    ) {
+    fn walk(&self, ray: &Ray, node_tests: &mut u64, mut cell: impl FnMut(&[u32]) -> Option<f32>) {
         let Some(h) = RayBoxPrecomp::new(ray).intersect(&self.bounds, ray.t_min, ray.t_max) else {
             return;
         };
@@ -186,7 +192,11 @@ impl Cells {
             }
             // The axis whose boundary comes first.
             let a = if next[0] < next[1] {
-                if next[0] < next[2] { 0 } else { 2 }
+                if next[0] < next[2] {
+                    0
+                } else {
+                    2
+                }
             } else if next[1] < next[2] {
                 1
             } else {
@@ -221,7 +231,9 @@ impl Object for Grid {
     }
 
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
-        self.built.as_ref().map_or(Bounds3::EMPTY, |(_, c, _)| c.bounds)
+        self.built
+            .as_ref()
+            .map_or(Bounds3::EMPTY, |(_, c, _)| c.bounds)
     }
 
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {

@@ -104,7 +104,10 @@ impl Builder<'_> {
             let parts: Vec<Vec<u32>> = (0..8)
                 .map(|k| {
                     let ob = octant(&bounds, k);
-                    ids.iter().copied().filter(|&i| overlaps(&ob, &self.boxes[i as usize])).collect()
+                    ids.iter()
+                        .copied()
+                        .filter(|&i| overlaps(&ob, &self.boxes[i as usize]))
+                        .collect()
                 })
                 .collect();
             // Split only if some octant holds fewer primitives than the cell.
@@ -174,7 +177,8 @@ impl Tree {
             let mut k = 0;
             for i in 0..8 {
                 let child = c.first + i;
-                if let Some(h) = pre.intersect(&self.cells[child as usize].bounds, ray.t_min, best) {
+                if let Some(h) = pre.intersect(&self.cells[child as usize].bounds, ray.t_min, best)
+                {
                     kids[k] = (child, h.t0);
                     k += 1;
                 }
@@ -220,7 +224,9 @@ impl Object for Octree {
     }
 
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
-        self.built.as_ref().map_or(Bounds3::EMPTY, |(_, t, _)| t.cells[0].bounds)
+        self.built
+            .as_ref()
+            .map_or(Bounds3::EMPTY, |(_, t, _)| t.cells[0].bounds)
     }
 
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {

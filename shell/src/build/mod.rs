@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// How long each step of building took.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct Timings {
     /// Loading and checking plugin libraries.
     pub load_plugins: Duration,
@@ -35,6 +35,9 @@ pub struct Timings {
     pub create: Duration,
     /// `prepare` calls.
     pub prepare: Duration,
+    /// `prepare` calls by class: an aggregate's build time is its `prepare`
+    /// (a mesh's is reading its file).
+    pub prepare_by_class: std::collections::BTreeMap<String, Duration>,
 }
 
 /// A built, prepared scene: everything the renderer needs. Objects are
@@ -127,6 +130,7 @@ fn build_world(
         load_plugins,
         create: b.create_time,
         prepare: b.prepare_time,
+        prepare_by_class: std::mem::take(&mut b.prepare_by_class),
     };
     let (shaders, objects_created) = (std::mem::take(&mut b.shaders), b.objects_created);
     drop(b);

@@ -39,6 +39,8 @@ pub(crate) struct Builder<'a> {
     pub objects_created: usize,
     pub create_time: Duration,
     pub prepare_time: Duration,
+    /// `prepare` time by class (an aggregate's build time is its `prepare`).
+    pub prepare_by_class: BTreeMap<String, Duration>,
 }
 
 impl<'a> Builder<'a> {
@@ -61,6 +63,7 @@ impl<'a> Builder<'a> {
             objects_created: 0,
             create_time: Duration::ZERO,
             prepare_time: Duration::ZERO,
+            prepare_by_class: BTreeMap::new(),
         }
     }
 
@@ -162,9 +165,12 @@ impl<'a> Builder<'a> {
     }
 
     fn prepared(&mut self, b: ObjectBuilder) -> Result<Object, CallError> {
+        let class = b.class_name();
         let t = Instant::now();
         let r = b.prepare(&self.prepare_host);
-        self.prepare_time += t.elapsed();
+        let dt = t.elapsed();
+        self.prepare_time += dt;
+        *self.prepare_by_class.entry(class.to_string()).or_default() += dt;
         r
     }
 
