@@ -20,6 +20,9 @@ use crate::abi::{Bounds3, Ray};
 use glam::Vec3;
 use std::ops::Range;
 
+/// A gap in a padded leaf order ([`Bvh4::pad_leaves`]).
+pub const PAD: u32 = u32::MAX;
+
 /// Deepest binary tree built; the 4-wide tree is no deeper.
 pub const MAX_DEPTH: usize = 64;
 /// Entries of the traversal stack: at most three siblings pushed per level.
@@ -128,6 +131,48 @@ impl Bvh4 {
             }
         }
         out
+    }
+
+    /// Give every leaf a range starting at a multiple of `to` in a longer
+    /// order, the gaps holding [`PAD`]: a leaf's first entry then names its
+    /// `to`-wide block by itself (`first / to`), with no lookup per leaf.
+    pub fn pad_leaves(&mut self, to: usize) {
+        let mut out: Vec<u32> = Vec::with_capacity(self.order.len() * 2);
+        let place = |first: u32, count: u32, out: &mut Vec<u32>| -> u32 {
+            let at = out.len() as u32;
+            out.extend_from_slice(&self.order[first as usize..(first + count) as usize]);
+            while out.len() % to != 0 {
+                out.push(PAD);
+            }
+            at
+        };
+        if let Some(r) = &self.root_leaf {
+            let at = place(r.start, r.end - r.start, &mut out);
+            self.root_leaf = Some(at..at + (r.end - r.start));
+        }
+        for n in 0..self.nodes.len() {
+            for s in 0..4 {
+                let (first, count) = (self.nodes[n].first[s], self.nodes[n].count[s]);
+                if count > 0 {
+                    self.nodes[n].first[s] = place(first, count, &mut out);
+                }
+            }
+        }
+        self.order = out;
+    }
+
+    /// The leaves: ranges of [`Bvh4::order`].
+    pub fn leaves(&self) -> impl Iterator<Item = Range<usize>> + '_ {
+        let root = self
+            .root_leaf
+            .iter()
+            .map(|r| r.start as usize..r.end as usize);
+        let inner = self.nodes.iter().flat_map(|n| {
+            (0..4)
+                .filter(|&s| n.count[s] > 0)
+                .map(|s| n.first[s] as usize..(n.first[s] + n.count[s]) as usize)
+        });
+        root.chain(inner)
     }
 
     /// The box of everything.

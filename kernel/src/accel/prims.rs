@@ -93,6 +93,107 @@ pub struct Primitives {
     /// The three vertices of each triangle entry, parallel to `refs`
     /// (zeros for other entries): the leaf's own layout, no index lookup.
     tris: Vec<[[f32; 3]; 3]>,
+    /// Packed leaves' triangles, four to a block ([`Primitives::pack`]).
+    blocks: Vec<Tri4>,
+    /// Per block: it holds triangles only (screened 4-wide).
+    packed: Vec<bool>,
+}
+
+/// Four triangles in structure-of-arrays order: `v[vertex][axis][lane]`.
+#[repr(C, align(16))]
+#[derive(Clone, Copy)]
+struct Tri4 {
+    v: [[[f32; 4]; 3]; 3],
+}
+
+impl Tri4 {
+    fn new(tris: impl Iterator<Item = [[f32; 3]; 3]>) -> Self {
+        let mut v = [[[0.0f32; 4]; 3]; 3];
+        for (lane, t) in tris.enumerate() {
+            for (k, p) in t.iter().enumerate() {
+                for a in 0..3 {
+                    v[k][a][lane] = p[a];
+                }
+            }
+        }
+        Tri4 { v }
+    }
+
+    /// The triangle in `lane`.
+    #[inline(always)]
+    fn tri(&self, lane: usize) -> [[f32; 3]; 3] {
+        let v = &self.v;
+        [0, 1, 2].map(|k| [v[k][0][lane], v[k][1][lane], v[k][2][lane]])
+    }
+
+    /// The lanes the exact test may accept below `t_max`: it rejects a lane
+    /// only where the scalar watertight test (same operations, same order,
+    /// per lane) decides a miss in f32 — mixed edge-function signs, or `t`
+    /// out of range — and keeps every lane with an exactly zero edge
+    /// function (the scalar test decides those in f64).
+    #[inline(always)]
+    fn screen(&self, r: &RayShear<f32>, t_max: f32) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: SSE/SSE2 only, part of every x86_64 CPU.
+            unsafe { self.screen_sse(r, t_max) }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (r, t_max);
+            0b1111
+        }
+    }
+
+    /// # Safety
+    /// The CPU must have SSE2 (every x86_64 CPU does).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn screen_sse(&self, r: &RayShear<f32>, t_max: f32) -> u32 {
+        use std::arch::x86_64::*;
+        let (o, k, s) = r.parts();
+        // SAFETY: the rows are four floats each; the rest is register arithmetic.
+        unsafe {
+            let load = |row: &[f32; 4]| _mm_loadu_ps(row.as_ptr());
+            let (sx, sy, sz) = (_mm_set1_ps(s[0]), _mm_set1_ps(s[1]), _mm_set1_ps(s[2]));
+            let mut px = [_mm_setzero_ps(); 3];
+            let mut py = [_mm_setzero_ps(); 3];
+            let mut pz = [_mm_setzero_ps(); 3];
+            for (vi, vert) in self.v.iter().enumerate() {
+                let tx = _mm_sub_ps(load(&vert[k[0]]), _mm_set1_ps(o[k[0]]));
+                let ty = _mm_sub_ps(load(&vert[k[1]]), _mm_set1_ps(o[k[1]]));
+                let tz = _mm_sub_ps(load(&vert[k[2]]), _mm_set1_ps(o[k[2]]));
+                px[vi] = _mm_add_ps(tx, _mm_mul_ps(sx, tz));
+                py[vi] = _mm_add_ps(ty, _mm_mul_ps(sy, tz));
+                pz[vi] = _mm_mul_ps(tz, sz);
+            }
+            let cross =
+                |a: usize, b: usize| _mm_sub_ps(_mm_mul_ps(px[a], py[b]), _mm_mul_ps(py[a], px[b]));
+            let (e0, e1, e2) = (cross(1, 2), cross(2, 0), cross(0, 1));
+            let zero = _mm_setzero_ps();
+            let any = |f: unsafe fn(__m128, __m128) -> __m128| {
+                _mm_or_ps(_mm_or_ps(f(e0, zero), f(e1, zero)), f(e2, zero))
+            };
+            let has_zero = any(_mm_cmpeq_ps);
+            let mixed = _mm_and_ps(any(_mm_cmplt_ps), any(_mm_cmpgt_ps));
+            let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
+            let ts = _mm_add_ps(
+                _mm_add_ps(_mm_mul_ps(e0, pz[0]), _mm_mul_ps(e1, pz[1])),
+                _mm_mul_ps(e2, pz[2]),
+            );
+            let lim = _mm_mul_ps(_mm_set1_ps(t_max), det);
+            let neg_ok = _mm_and_ps(
+                _mm_cmplt_ps(det, zero),
+                _mm_and_ps(_mm_cmplt_ps(ts, zero), _mm_cmpge_ps(ts, lim)),
+            );
+            let pos_ok = _mm_and_ps(
+                _mm_cmpgt_ps(det, zero),
+                _mm_and_ps(_mm_cmpgt_ps(ts, zero), _mm_cmple_ps(ts, lim)),
+            );
+            let in_range = _mm_andnot_ps(mixed, _mm_or_ps(neg_ok, pos_ok));
+            _mm_movemask_ps(_mm_or_ps(has_zero, in_range)) as u32
+        }
+    }
 }
 
 /// What [`Primitives::gather`] returns besides the table: each primitive's box,
@@ -112,6 +213,8 @@ impl Primitives {
             sources: Vec::with_capacity(children.len()),
             refs: Vec::new(),
             tris: Vec::new(),
+            blocks: Vec::new(),
+            packed: Vec::new(),
         };
         let mut boxes = Vec::new();
         for (c, child) in children.iter().enumerate() {
@@ -176,15 +279,29 @@ impl Primitives {
 
     /// Put the primitives in `order` (`order[k]` is the old index of the new
     /// `k`-th): a structure whose leaves are ranges stores them contiguously.
+    /// [`PAD`](super::PAD) entries of `order` become gaps that no query
+    /// visits.
     pub fn reorder(&mut self, order: &[u32]) {
-        self.refs = order.iter().map(|&i| self.refs[i as usize]).collect();
-        self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
+        let gap = PrimRef {
+            child: u32::MAX,
+            prim: u32::MAX,
+        };
+        self.refs = order
+            .iter()
+            .map(|&i| self.refs.get(i as usize).copied().unwrap_or(gap))
+            .collect();
+        self.tris = order
+            .iter()
+            .map(|&i| self.tris.get(i as usize).copied().unwrap_or_default())
+            .collect();
     }
 
     /// Bytes held, for the benchmarks' memory figures.
     pub fn bytes(&self) -> usize {
         self.refs.capacity() * std::mem::size_of::<PrimRef>()
             + self.tris.capacity() * std::mem::size_of::<[[f32; 3]; 3]>()
+            + self.blocks.capacity() * std::mem::size_of::<Tri4>()
+            + self.packed.capacity()
             + self.children.capacity() * std::mem::size_of::<Child>()
     }
 
@@ -208,21 +325,7 @@ impl Primitives {
             tests += 1;
             let r = self.refs[i];
             match self.sources[r.child as usize] {
-                Source::Triangles => {
-                    let limit = q.limit(r.key());
-                    let h =
-                        intersect_triangle_sheared(&q.shear, d, self.tris[i], q.ray.t_min, limit);
-                    if let Some(h) = h {
-                        q.ray.t_max = h.t;
-                        q.best = r.key();
-                        hit.stack[level as usize] = HitEntry {
-                            index: r.child,
-                            prim: 0,
-                            uv: [0.0; 2],
-                        };
-                        hit.record_leaf(level + 1, h.t, r.prim, [h.b[1], h.b[2]]);
-                    }
-                }
+                Source::Triangles => self.triangle(q, d, i, self.vertices(i), hit, level),
                 Source::Set(_) => {
                     if !run.push(r) {
                         self.flush(ctx, q, &mut run, hit, level);
@@ -237,6 +340,137 @@ impl Primitives {
         }
         self.flush(ctx, q, &mut run, hit, level);
         ctx.stats.prim_tests += tests;
+    }
+
+    /// The vertices of triangle entry `i`: from the unpacked copy, or from
+    /// its block once [`Primitives::pack`] dropped that copy.
+    #[inline(always)]
+    fn vertices(&self, i: usize) -> [[f32; 3]; 3] {
+        match self.tris.get(i) {
+            Some(v) => *v,
+            None => self.blocks[i / 4].tri(i % 4),
+        }
+    }
+
+    /// The exact test of triangle entry `i` (vertices `v`) under the tie rule.
+    #[inline(always)]
+    fn triangle(
+        &self,
+        q: &mut Nearest,
+        d: [f32; 3],
+        i: usize,
+        v: [[f32; 3]; 3],
+        hit: &mut Hit,
+        level: u32,
+    ) {
+        let r = self.refs[i];
+        let limit = q.limit(r.key());
+        if let Some(h) = intersect_triangle_sheared(&q.shear, d, v, q.ray.t_min, limit) {
+            q.ray.t_max = h.t;
+            q.best = r.key();
+            hit.stack[level as usize] = HitEntry {
+                index: r.child,
+                prim: 0,
+                uv: [0.0; 2],
+            };
+            hit.record_leaf(level + 1, h.t, r.prim, [h.b[1], h.b[2]]);
+        }
+    }
+
+    /// Pack the entries four to a block, for [`Primitives::intersect_range`]'s
+    /// 4-wide test. The table must be in a padded leaf order
+    /// ([`Bvh4::pad_leaves`](super::Bvh4::pad_leaves) with 4): every leaf
+    /// starts a block, so a leaf's first entry names its block. A block is
+    /// screened 4-wide if it holds triangles only; other leaves are queried
+    /// entry by entry. The unpacked copy of the vertices is then dropped:
+    /// the blocks hold them.
+    pub fn pack(&mut self) {
+        let gap = |r: &PrimRef| r.child == u32::MAX;
+        self.blocks = self
+            .tris
+            .chunks(4)
+            .map(|c| Tri4::new(c.iter().copied()))
+            .collect();
+        self.packed = self
+            .refs
+            .chunks(4)
+            .map(|c| {
+                c.iter().any(|r| !gap(r))
+                    && c.iter().all(|r| {
+                        gap(r) || matches!(self.sources[r.child as usize], Source::Triangles)
+                    })
+            })
+            .collect();
+        self.tris = Vec::new();
+    }
+
+    /// Nearest hit among the entries of `range` (a leaf of a structure that
+    /// called [`Primitives::pack`]): a packed leaf's triangles are screened
+    /// four at a time (the same arithmetic per lane as the scalar test, so
+    /// no hit is lost), and only the survivors take the exact test.
+    #[inline]
+    pub fn intersect_range(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &mut Nearest,
+        range: std::ops::Range<usize>,
+        hit: &mut Hit,
+        level: u32,
+    ) {
+        let b = range.start / 4;
+        if !self.packed.get(b).copied().unwrap_or(false) {
+            return self.intersect_ids(ctx, q, range, hit, level);
+        }
+        ctx.stats.prim_tests += range.len() as u64;
+        let d = q.ray.dir.to_array();
+        for (k, first) in range.clone().step_by(4).enumerate() {
+            let lanes = (range.end - first).min(4);
+            // Screen with the loosest limit a tie could need.
+            let limit = if q.found() {
+                q.ray.t_max.next_up()
+            } else {
+                q.ray.t_max
+            };
+            let block = &self.blocks[b + k];
+            let mut mask = block.screen(&q.shear, limit) & ((1 << lanes) - 1);
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                self.triangle(q, d, first + lane, block.tri(lane), hit, level);
+            }
+        }
+    }
+
+    /// Any hit among the entries of `range` (see [`Primitives::intersect_range`]).
+    #[inline]
+    pub fn occluded_range(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        range: std::ops::Range<usize>,
+        level: u32,
+    ) -> bool {
+        let b = range.start / 4;
+        if !self.packed.get(b).copied().unwrap_or(false) {
+            return self.occluded_ids(ctx, ray, range, level);
+        }
+        ctx.stats.prim_tests += range.len() as u64;
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let shear = RayShear::new(o, d);
+        for (k, first) in range.clone().step_by(4).enumerate() {
+            let lanes = (range.end - first).min(4);
+            let block = &self.blocks[b + k];
+            let mut mask = block.screen(&shear, ray.t_max) & ((1 << lanes) - 1);
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let t = block.tri(lane);
+                if intersect_triangle_sheared(&shear, d, t, ray.t_min, ray.t_max).is_some() {
+                    return true;
+                }
+            }
+        }
+        false
     }
 
     /// Query a run of one primitive set's primitives: those that win a tie
@@ -306,7 +540,7 @@ impl Primitives {
             let r = self.refs[i];
             found = match self.sources[r.child as usize] {
                 Source::Triangles => {
-                    intersect_triangle_sheared(&shear, d, self.tris[i], ray.t_min, ray.t_max)
+                    intersect_triangle_sheared(&shear, d, self.vertices(i), ray.t_min, ray.t_max)
                         .is_some()
                 }
                 Source::Set(set) => set.occluded(ctx, ray, &[r.prim], level + 1),

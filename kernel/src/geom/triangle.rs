@@ -94,6 +94,15 @@ impl<R: Real> RayShear<R> {
     }
 }
 
+impl<R: Copy> RayShear<R> {
+    /// The origin, the axis permutation (x, y, z of the sheared space) and
+    /// the shear: for a SIMD version of the same test.
+    #[inline]
+    pub fn parts(&self) -> ([R; 3], [usize; 3], [R; 3]) {
+        (self.o, self.k, self.s)
+    }
+}
+
 /// Is the triangle degenerate (zero area in this precision)? Such triangles
 /// are never hit (T3); an aggregate may leave them out of its structure.
 #[inline]

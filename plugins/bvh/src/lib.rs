@@ -47,9 +47,13 @@ impl Object for Bvh {
 
     fn prepare(&mut self, _env: &Prepare) -> Result<(), PluginError> {
         let g = Primitives::gather(&self.children)?;
-        let bvh = Bvh4::build(&g.boxes, self.params);
+        let mut bvh = Bvh4::build(&g.boxes, self.params);
+        // Leaves start at multiples of four: each names its block of four
+        // triangles, screened at once.
+        bvh.pad_leaves(4);
         let mut prims = g.prims;
         prims.reorder(&bvh.order);
+        prims.pack();
         self.built = Some((prims, bvh));
         Ok(())
     }
@@ -67,7 +71,7 @@ impl Object for Bvh {
         let mut q = Nearest::new(ray);
         let mut nodes = 0;
         bvh.traverse(ray, ray.t_max, &mut nodes, |leaf| {
-            prims.intersect_ids(ctx, &mut q, leaf, hit, level);
+            prims.intersect_range(ctx, &mut q, leaf, hit, level);
             Some(q.ray.t_max)
         });
         ctx.stats.node_tests += nodes;
@@ -81,7 +85,7 @@ impl Object for Bvh {
         let mut found = false;
         let mut nodes = 0;
         bvh.traverse(ray, ray.t_max, &mut nodes, |leaf| {
-            found = prims.occluded_ids(ctx, ray, leaf, level);
+            found = prims.occluded_range(ctx, ray, leaf, level);
             (!found).then_some(ray.t_max)
         });
         ctx.stats.node_tests += nodes;
