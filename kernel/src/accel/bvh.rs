@@ -141,7 +141,7 @@ impl Bvh4 {
         let place = |first: u32, count: u32, out: &mut Vec<u32>| -> u32 {
             let at = out.len() as u32;
             out.extend_from_slice(&self.order[first as usize..(first + count) as usize]);
-            while out.len() % to != 0 {
+            while !out.len().is_multiple_of(to) {
                 out.push(PAD);
             }
             at
