@@ -254,7 +254,8 @@ impl Bvh4 {
         }
         let pre = Precomp::new(ray);
         let mut t_max = t_max;
-        let mut stack = Stack::new();
+        let mut buf = std::mem::MaybeUninit::uninit();
+        let mut stack = Stack::on(&mut buf);
         // The node or leaf being visited: a node index, or a leaf as
         // (node << 2 | slot) with the top bit set.
         let mut cur = 0u32;
@@ -337,38 +338,44 @@ impl Bvh4 {
 /// Marks a leaf on the traversal stack.
 const LEAF: u32 = 1 << 31;
 
-/// The traversal stack: [`STACK`] entries, not initialised (the stack is
-/// created once per ray; zeroing 1.5 KB would cost more than a node test).
-struct Stack {
-    items: [std::mem::MaybeUninit<(u32, f32)>; STACK],
+/// The traversal stack over a buffer of [`STACK`] entries the caller keeps
+/// uninitialised (created once per ray; zeroing 1.5 KB would cost more than a
+/// node test — and rustc zero-fills a `MaybeUninit` held in a struct, so the
+/// buffer is a local of the traversal and this borrows it).
+struct Stack<'a> {
+    items: *mut (u32, f32),
     len: usize,
+    _buf: std::marker::PhantomData<&'a mut [(u32, f32); STACK]>,
 }
 
-impl Stack {
-    #[inline]
-    fn new() -> Self {
+impl<'a> Stack<'a> {
+    #[inline(always)]
+    fn on(buf: &'a mut std::mem::MaybeUninit<[(u32, f32); STACK]>) -> Self {
         Stack {
-            items: [std::mem::MaybeUninit::uninit(); STACK],
+            items: buf.as_mut_ptr() as *mut (u32, f32),
             len: 0,
+            _buf: std::marker::PhantomData,
         }
     }
 
     /// Push; the depth bound (`MAX_DEPTH`, three siblings a level) makes
-    /// overflow impossible, and indexing checks it regardless.
-    #[inline]
+    /// overflow impossible, and the assertion checks it regardless.
+    #[inline(always)]
     fn push(&mut self, v: (u32, f32)) {
-        self.items[self.len] = std::mem::MaybeUninit::new(v);
+        assert!(self.len < STACK, "BVH traversal stack overflow");
+        // SAFETY: `len < STACK`: the slot is inside the borrowed buffer.
+        unsafe { self.items.add(self.len).write(v) };
         self.len += 1;
     }
 
-    #[inline]
+    #[inline(always)]
     fn pop(&mut self) -> Option<(u32, f32)> {
         if self.len == 0 {
             return None;
         }
         self.len -= 1;
-        // SAFETY: every item below `len` was written by `push`.
-        Some(unsafe { self.items[self.len].assume_init() })
+        // SAFETY: every slot below `len` was written by `push`.
+        Some(unsafe { self.items.add(self.len).read() })
     }
 }
 
