@@ -110,8 +110,12 @@ impl Builder<'_> {
                         .collect()
                 })
                 .collect();
-            // Split only if some octant holds fewer primitives than the cell.
-            if parts.iter().any(|p| p.len() < ids.len()) {
+            // Split only if it separates the primitives: every octant holds
+            // fewer than the cell, and the references grow at most twofold
+            // (a crowd of primitives around one point, as at a mesh's pole,
+            // would otherwise be copied into eight cells at every level).
+            let total: usize = parts.iter().map(Vec::len).sum();
+            if parts.iter().all(|p| p.len() < ids.len()) && total <= 2 * ids.len() {
                 let first = self.tree.cells.len();
                 for k in 0..8 {
                     self.tree.cells.push(Cell {
