@@ -5,8 +5,10 @@
 use crate::rays::{self, HitRec, RayRec};
 use anyhow::{bail, Context, Result};
 use rtk_kernel::abi::{Hit, Ray, Stats, TraceCtx};
+use rtk_shell::plugins::Module;
 use rtk_shell::{Parallel, PluginPath, Registry, World};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// The arguments of `rtk trace`.
@@ -64,13 +66,16 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     let t_build = Instant::now();
     let world = load_world(&a, parallel)?;
     let load = t_build.elapsed().as_secs_f64();
-    // The aggregate's build is its `prepare`; the rest of loading is reading files.
+    // The aggregates' build is their `prepare` (every class that builds over
+    // primitives, the nested ones too); the rest of loading is reading files.
     let root_class = world.root.class_name();
-    let build = world
-        .timings
-        .prepare_by_class
-        .get(root_class)
-        .map_or(0.0, |d| d.as_secs_f64());
+    let build: f64 = world
+        .plugins
+        .iter()
+        .filter(|p| matches!(p.module, Module::Object(m) if m.flattens_primitives()))
+        .filter_map(|p| world.timings.prepare_by_class.get(&p.class))
+        .map(|d| d.as_secs_f64())
+        .sum();
     let memory = resident_bytes().saturating_sub(rss0);
     let b = world.bounds;
     if b.is_empty() {
@@ -96,9 +101,14 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     }
     let mut times = Vec::new();
     let mut result = None;
+    // Query ids must never repeat on a thread, across passes too (mailboxes
+    // are keyed by them): each thread's counter lives for the whole run.
+    let next_query: Vec<AtomicU64> = (0..pool.current_num_threads())
+        .map(|_| AtomicU64::new(0))
+        .collect();
     for _ in 0..a.iters.max(1) {
         let t = Instant::now();
-        let r = trace_all(&world, &rays, a.occluded, pool)?;
+        let r = trace_all(&world, &rays, a.occluded, pool, &next_query)?;
         times.push(t.elapsed().as_secs_f64());
         result = Some(r);
     }
@@ -214,18 +224,21 @@ fn trace_all(
     rays: &[RayRec],
     occluded: bool,
     pool: &rayon::ThreadPool,
+    next_query: &[AtomicU64],
 ) -> Result<(Vec<HitRec>, Stats)> {
     use rayon::prelude::*;
     let threads = pool.current_num_threads() as u32;
     let chunks: Vec<(Vec<HitRec>, Stats, Option<String>)> = pool.install(|| {
         rays.par_chunks(CHUNK)
             .map(|chunk| {
-                let ti = rayon::current_thread_index().unwrap_or(0) as u32;
-                let mut ctx = TraceCtx::new(ti, threads, 0);
+                let ti = rayon::current_thread_index().unwrap_or(0);
+                let counter = &next_query[ti];
+                let mut ctx = TraceCtx::new(ti as u32, threads, counter.load(Ordering::Relaxed));
                 let hits = chunk
                     .iter()
                     .map(|r| trace_one(world, &mut ctx, r, occluded))
                     .collect();
+                counter.store(ctx.query_counter(), Ordering::Relaxed);
                 let failure = ctx.failure().map(|(c, m)| format!("plugin `{c}` {m}"));
                 (hits, ctx.stats, failure)
             })

@@ -197,6 +197,10 @@ fn trace(dir: &Path, scene: &Path, rays: &Path, class: &str, occluded: bool) -> 
         out.to_str().unwrap(),
         "--threads",
         "2",
+        // Several passes: query ids (the mailboxes' marks) must never repeat
+        // on a thread, across chunks and passes (a regression once).
+        "--iters",
+        "3",
         "--json",
     ];
     if occluded {
