@@ -3,28 +3,50 @@
 
 What: for each mesh and each ray set of ../shared/anchors/embree/RAYS.md
 (primary and incoherent nearest hits, incoherent occlusion), run Embree's
-harness (`embree_bench --dump`) and `rtk trace --out`, read both per-ray
-answers and compare them. A ray matches when both miss, both hit the same
-primitive (t may differ in the last bits: the largest relative difference is
-reported), or, for occlusion, both agree. Each mismatching ray is then
-re-intersected in f64 (Python floats; Moller-Trumbore without rejection, so
-the barycentrics say how far inside or outside a triangle the ray passes)
-and classified:
+harness (`embree_bench --dump`) and `rtk trace --out --save-rays`, check that
+both traced the same rays (rtk's JSON rays_hash against Embree's), read both
+per-ray answers and compare them. A ray matches when both miss, both hit the
+same primitive (t may differ in the last bits: the largest relative
+difference is reported, with both programs' errors against f64), or, for
+occlusion, both agree.
 
-  tie     tie on a shared edge/vertex: both triangles hit in f64 at t equal
-          within --t-eps (relative), they share a vertex (same index or the
-          same position: the teapot's patches duplicate their seam vertices),
-          and on either triangle the hit point lies within --bary-eps
-          (barycentric) of the shared edge or vertex;
-  graze   graze/silhouette: one program hits, the other misses, and in f64
-          the hit triangle is hit with a barycentric within --bary-eps of an
-          edge (shared or not: a ray grazing the mesh's outline). For
-          occlusion, where neither program names a triangle, every triangle
-          is tested in f64 (brute force): the ray must hit nothing clearly
-          (all f64 hits within --bary-eps of an edge) and graze something;
-  diff    different surfaces at nearly equal t: both hit different triangles
-          sharing no vertex, both hit in f64, t equal within --t-eps;
-  unexpl  anything else; printed in full, and the exit status is 1.
+Each mismatching ray is re-intersected in f64 (Python floats; Moller-Trumbore
+without rejection, so the barycentrics say how far inside or outside a
+triangle the ray passes) and classified:
+
+  dup           two triangles with the same three vertex positions (the
+                dragon has 1,405 such groups), hit in f64 at equal t;
+  tie           both triangles hit in f64 at equal t, they share a vertex
+                (same index, or same position: the teapot's patches duplicate
+                their seam vertices), and on either triangle the crossing
+                lies near the shared edge or vertex;
+  graze         one program hits, the other misses, and in f64 the hit
+                triangle is hit near one of its edges (shared or not: a ray
+                grazing the mesh's outline). For occlusion, where neither
+                program names a triangle, every triangle is tested in f64
+                (brute force): some triangle must be hit within tolerance,
+                and all of those near an edge;
+  graze_behind  both hit, at clearly different t: the nearer triangle is hit
+                near an edge in f64 and the farther one within tolerance (one
+                program slipped past a silhouette edge onto a surface behind);
+  diff          different triangles sharing no vertex, both hit in f64 at
+                equal t (surfaces crossing or touching);
+  fold          the same between triangles that share a vertex, with the
+                crossing away from it (a folded or self-intersecting mesh);
+  unexpl        anything else: printed in full; the exit status is then 1.
+
+"Near an edge" means within --bary-eps (barycentric, default 1e-5) or,
+scale-aware, within --ulps (default 2) f32 ulps of the largest coordinate
+involved divided by |cos(ray, normal)|, in world units; "equal t" means within
+--t-eps (relative, default 1e-6) or that same world distance. The
+scale-aware test matters on the dragon (coordinates ~100 for edges ~0.4: one
+f32 ulp of a coordinate is ~2e-5 barycentric); each ray it is needed for is
+printed and counted ("of which via --ulps"). The "f64 sides with" column says
+whose answer the f64 test supports (a hit triangle beats a miss or a triangle
+missed in f64; of two hit triangles the nearer wins, "undecided" on equal t,
+on duplicates, or when both triangles are missed in f64; for occlusion, whether any triangle
+is hit), whatever the category: on a tie it names the triangle that
+contains the crossing.
 
 Why: hit counts and checksums agreeing within tolerance can hide
 compensating errors; this accounts for every single ray.
@@ -33,16 +55,16 @@ How to run (from /work/main; the anchor is built by its build.sh):
     python3 host/benches/compare_embree.py \\
         --embree /tmp/anchors/embree/embree_bench \\
         --meshes ../shared/data/meshes/{bunny,teapot,dragon-200k}.ply
-Options: --rtk (default target/release/rtk), --aggregate (rtk's, default
-bvh), --threads (2), --bary-eps (1e-5), --t-eps (1e-6), --show N (print the
-first N rays of every category, not only the unexplained ones), --keep DIR
-(keep the ray and hit files there instead of a temporary folder).
+Other options: --rtk (default target/release/rtk), --aggregate (rtk's,
+default bvh), --threads (2), --show N (also print the first N rays of every
+category), --keep DIR (keep the ray and hit files there instead of a
+temporary folder).
 
-Expected runtime: about 10 s per small mesh and under a minute for the
-dragon (202,520 triangles) on 2 cores: the comparison of 3 x 2^20 rays in
-pure Python dominates; only mismatches get f64 geometry, and an occlusion
-mismatch costs one brute-force pass over the triangles (~0.3 s on the
-dragon). Standard library only.
+Expected runtime: ~4 s per small mesh and ~15 s for the dragon (202,520
+triangles) on 2 cores, the Python comparison of 3 x 2^20 rays dominating;
+only mismatches get f64 geometry, and an occlusion mismatch costs one
+brute-force pass over the triangles (~0.4 s on the dragon). Standard library
+only; needs ~200 MB of memory and ~200 MB of temporary files per mesh.
 """
 
 import argparse
@@ -55,6 +77,7 @@ import sys
 import tempfile
 import time
 from array import array
+from collections import namedtuple
 
 # (name in the table, rtk --rayset, rtk extra flags, Embree dump/JSON set name)
 SETS = [
@@ -62,7 +85,15 @@ SETS = [
     ("incoherent", "incoherent", [], "incoherent_intersect1"),
     ("occluded", "incoherent", ["--occluded"], "incoherent_occluded1"),
 ]
-CATEGORIES = ["tie", "graze", "diff", "unexpl"]
+LABELS = {  # category -> column title
+    "dup": "duplicate triangles",
+    "tie": "tie on shared edge/vertex",
+    "graze": "graze/silhouette (other misses)",
+    "graze_behind": "graze (other hits behind)",
+    "diff": "different surfaces, equal t",
+    "fold": "adjacent overlapping triangles, equal t",
+    "unexpl": "unexplained",
+}
 MISS = -1
 
 
@@ -176,18 +207,61 @@ def intersect(o, d, tri):
     return dot(e2, q) / det, (1.0 - b1 - b2, b1, b2)
 
 
-def hit_in_f64(isect, eps):
-    """Hit with tolerance: in front of the origin, no barycentric below -eps."""
-    return isect is not None and isect[0] > 0.0 and min(isect[1]) >= -eps
+Hit = namedtuple("Hit", "t bary dist scale")
+Hit.__doc__ = """The ray's crossing with a triangle's plane, in f64: t, the
+barycentrics (b0, b1, b2), the signed distances (world units, positive
+inside) to the edges opposite corners 0, 1, 2, and `scale`, one f32 ulp of
+the coordinates involved divided by |cos(ray, normal)|: how far an f32
+computation can misplace the crossing (see Tol)."""
 
 
-def grazes(isect, eps):
-    """Hit within eps of an edge: the smallest barycentric is within eps of 0."""
-    return isect is not None and isect[0] > 0.0 and abs(min(isect[1])) <= eps
+def f64_hit(o, d, tri):
+    """Hit of the ray on the triangle (with no rejection), None if parallel."""
+    isect = intersect(o, d, tri)
+    if isect is None:
+        return None
+    t, bary = isect
+    n = cross(sub(tri[1], tri[0]), sub(tri[2], tri[0]))
+    area2 = math.sqrt(dot(n, n))
+    cos = abs(dot(d, n)) / (area2 * math.sqrt(dot(d, d)))
+    point = tuple(o[k] + t * d[k] for k in range(3))
+    size = max(abs(x) for v in (o, point) + tuple(tri) for x in v)
+    dist = tuple(bary[k] * area2 / math.dist(tri[(k + 1) % 3], tri[(k + 2) % 3]) for k in range(3))
+    return Hit(t, bary, dist, size * 2.0 ** -23 / max(cos, 1e-12))
 
 
-def close_t(a, b, eps):
-    return abs(a - b) <= eps * max(abs(a), abs(b))
+class Tol:
+    """Tolerances: `bary` (barycentric) and `t` (relative) as given; with
+    `ulps` > 0 a crossing also counts as near an edge when its world distance
+    to it is within ulps * hit.scale, and two t as equal when they differ by
+    at most that. The second, scale-aware test is needed on meshes whose
+    coordinates are large next to their triangles (the dragon: coordinates
+    ~100, edges ~0.4, so one f32 ulp of a coordinate is ~2e-5 barycentric)."""
+
+    def __init__(self, bary, t, ulps):
+        self.bary, self.t, self.ulps = bary, t, ulps
+
+    def near(self, hit, k):
+        """The crossing is within tolerance of the edge opposite corner k."""
+        return abs(hit.bary[k]) <= self.bary or abs(hit.dist[k]) <= self.ulps * hit.scale
+
+    def inside(self, hit):
+        """Hit within tolerance: in front, every negative barycentric near 0."""
+        return hit is not None and hit.t > 0.0 and all(
+            hit.bary[k] >= 0.0 or self.near(hit, k) for k in range(3))
+
+    def grazes(self, hit):
+        """Hit within tolerance, and near an edge."""
+        return self.inside(hit) and any(self.near(hit, k) for k in range(3))
+
+    def close_t(self, h1, h2):
+        dt = abs(h1.t - h2.t)
+        return dt <= self.t * max(abs(h1.t), abs(h2.t)) or dt <= self.ulps * max(h1.scale, h2.scale)
+
+
+def strict(hit):
+    """Hit in exact-ish f64 terms: in front, no negative barycentric."""
+    return hit is not None and hit.t > 0.0 and min(hit.bary) >= 0.0
 
 
 def shared_corners(mesh, pa, pb):
@@ -199,10 +273,10 @@ def shared_corners(mesh, pa, pb):
     return [k for k, i in enumerate(tris[pa]) if i in ib or verts[i] in pos_b]
 
 
-def near_shared(bary, corners, eps):
-    """The point lies within eps of the edge/vertex spanned by `corners`:
-    every other corner's barycentric is within eps of 0."""
-    return all(abs(bary[k]) <= eps for k in range(3) if k not in corners)
+def near_shared(tol, hit, corners):
+    """The crossing is near the edge/vertex spanned by `corners`: near every
+    edge opposite a corner that is not shared."""
+    return all(tol.near(hit, k) for k in range(3) if k not in corners)
 
 
 def triangle(mesh, prim):
@@ -212,47 +286,83 @@ def triangle(mesh, prim):
 
 # ---------------------------------------------------------------- classification
 
-def classify_nearest(mesh, o, d, pr, pe, eps):
-    """Category and f64 details of a nearest-hit mismatch (rtk prim pr,
-    Embree prim pe, -1 for a miss)."""
-    info = {}
-    for who, p in (("rtk", pr), ("embree", pe)):
-        if p != MISS:
-            info[who] = (p, intersect(o, d, triangle(mesh, p)))
+def category_nearest(mesh, tol, pr, pe, hr, he):
+    """Category of a nearest-hit mismatch: rtk prim pr / Embree prim pe
+    (-1 for a miss) and their f64 hits hr / he (None for a miss)."""
     if pr == MISS or pe == MISS:  # one hits, the other misses
-        _, isect = info["rtk" if pr != MISS else "embree"]
-        return ("graze" if grazes(isect, eps.bary) else "unexpl"), info
-    ir, ie = info["rtk"][1], info["embree"][1]
-    if not (hit_in_f64(ir, eps.bary) and hit_in_f64(ie, eps.bary)) or not close_t(ir[0], ie[0], eps.t):
-        return "unexpl", info
-    ca, cb = shared_corners(mesh, pr, pe), shared_corners(mesh, pe, pr)
-    info["shared"] = len(ca)
-    if not ca:
-        return "diff", info
-    if near_shared(ir[1], ca, eps.bary) or near_shared(ie[1], cb, eps.bary):
-        return "tie", info
-    return "unexpl", info
+        return "graze" if tol.grazes(hr or he) else "unexpl"
+    if hr is None or he is None:  # a triangle parallel to the ray
+        return "unexpl"
+    if tol.close_t(hr, he):
+        if not (tol.inside(hr) and tol.inside(he)):
+            return "unexpl"
+        ca, cb = shared_corners(mesh, pr, pe), shared_corners(mesh, pe, pr)
+        if not ca:
+            return "diff"
+        if len(ca) == 3:
+            return "dup"
+        if near_shared(tol, hr, ca) or near_shared(tol, he, cb):
+            return "tie"
+        return "fold"
+    near, far = (hr, he) if hr.t < he.t else (he, hr)
+    return "graze_behind" if tol.grazes(near) and tol.inside(far) else "unexpl"
 
 
-def brute_force(mesh, o, d, eps):
-    """Every triangle the ray hits in f64 within tolerance: [(prim, t, bary)]."""
+def verdict_nearest(hr, he):
+    """Whose answer the f64 test supports: a strictly hit triangle beats a
+    miss or a triangle missed in f64; of two hit ones the nearer wins."""
+    vr, ve = strict(hr), strict(he)
+    if vr and ve:
+        return "rtk" if hr.t < he.t else "embree" if he.t < hr.t else "undecided"
+    if vr or ve:
+        return "rtk" if vr else "embree"
+    return "rtk" if hr is None else "embree" if he is None else "undecided"
+
+
+def classify_nearest(mesh, o, d, pr, pe, tol, tol0):
+    """(category, f64 verdict, needed the scale-aware tolerance, details)."""
+    hr = f64_hit(o, d, triangle(mesh, pr)) if pr != MISS else None
+    he = f64_hit(o, d, triangle(mesh, pe)) if pe != MISS else None
+    info = {"rtk": (pr, hr), "embree": (pe, he)}
+    if pr != MISS and pe != MISS:
+        info["shared corners"] = len(shared_corners(mesh, pr, pe))
+    cat = category_nearest(mesh, tol0, pr, pe, hr, he)
+    scaled = cat == "unexpl" and tol.ulps > 0
+    if scaled:
+        cat = category_nearest(mesh, tol, pr, pe, hr, he)
+    verdict = "undecided" if cat == "dup" else verdict_nearest(hr, he)
+    return cat, verdict, scaled and cat != "unexpl", info
+
+
+def brute_force(mesh, o, d):
+    """The triangles whose plane the ray crosses in front of it within 1 %
+    (barycentric) of the triangle: [(prim, Hit)]. A cheap filter first."""
     verts, tris = mesh
     found = []
-    for p, tri in enumerate(tris):
-        isect = intersect(o, d, (verts[tri[0]], verts[tri[1]], verts[tri[2]]))
-        if hit_in_f64(isect, eps):
-            found.append((p, isect[0], isect[1]))
+    for p, (i, j, k) in enumerate(tris):
+        isect = intersect(o, d, (verts[i], verts[j], verts[k]))
+        if isect is not None and isect[0] > 0.0 and min(isect[1]) >= -0.01:
+            found.append((p, f64_hit(o, d, triangle(mesh, p))))
     return found
 
 
-def classify_occluded(mesh, o, d, eps):
-    """An occlusion mismatch is a graze when the ray hits no triangle clearly
-    in f64 (all hits within eps of an edge) and grazes at least one."""
-    found = brute_force(mesh, o, d, eps.bary)
-    info = {"f64 hits": found}
-    if found and all(min(b) <= eps.bary for _, _, b in found):
-        return "graze", info
-    return "unexpl", info
+def category_occluded(tol, found):
+    """A graze when some triangle is hit within tolerance and none clearly."""
+    hit = [h for _, h in found if tol.inside(h)]
+    return "graze" if hit and all(tol.grazes(h) for h in hit) else "unexpl"
+
+
+def classify_occluded(mesh, o, d, occ_rtk, tol, tol0):
+    """Occlusion mismatch: neither program names a triangle, so every
+    triangle is tested in f64."""
+    found = brute_force(mesh, o, d)
+    cat = category_occluded(tol0, found)
+    scaled = cat == "unexpl" and tol.ulps > 0
+    if scaled:
+        cat = category_occluded(tol, found)
+    occluded = any(strict(h) for _, h in found)
+    verdict = "rtk" if occluded == occ_rtk else "embree"
+    return cat, verdict, scaled and cat != "unexpl", {"f64 candidates": found}
 
 
 # ---------------------------------------------------------------- comparison
@@ -286,22 +396,27 @@ def ray_at(rays, i):
     return tuple(rays[8 * i:8 * i + 3]), tuple(rays[8 * i + 3:8 * i + 6])
 
 
-def describe(i, o, d, rtk_ans, emb_ans, cat, info):
-    lines = [f"  ray {i} [{cat}] org ({o[0]!r}, {o[1]!r}, {o[2]!r}) dir ({d[0]!r}, {d[1]!r}, {d[2]!r})",
-             f"    rtk: {rtk_ans}   embree: {emb_ans}"]
+def fmt_hit(label, prim, hit):
+    if hit is None:
+        return f"    f64 {label} prim {prim}: ray parallel to its plane"
+    k = min(range(3), key=lambda j: abs(hit.dist[j]))
+    b = hit.bary
+    return (f"    f64 {label} prim {prim}: t {hit.t!r} bary ({b[0]:.3e}, {b[1]:.3e}, {b[2]:.3e}), "
+            f"nearest edge at {hit.dist[k]:+.2e} (world; + inside) = {hit.dist[k] / hit.scale:+.2f} "
+            f"f32 ulps/|cos|")
+
+
+def describe(i, o, d, rtk_ans, emb_ans, cat, verdict, info):
+    lines = [f"  ray {i} [{LABELS[cat]}; f64 sides with {verdict}]",
+             f"    org ({o[0]!r}, {o[1]!r}, {o[2]!r}) dir ({d[0]!r}, {d[1]!r}, {d[2]!r})",
+             f"    rtk: {rtk_ans}   Embree: {emb_ans}"]
     for key, val in info.items():
-        if key in ("rtk", "embree"):
-            p, isect = val
-            if isect is None:
-                lines.append(f"    f64 {key} prim {p}: ray parallel to its plane")
-            else:
-                t, b = isect
-                lines.append(f"    f64 {key} prim {p}: t {t!r} bary ({b[0]:.3e}, {b[1]:.3e}, {b[2]:.3e})")
-        elif key == "f64 hits":
-            lines.append(f"    f64 brute force: {len(val)} triangle(s) hit within tolerance")
-            for p, t, b in val[:8]:
-                lines.append(f"      prim {p}: t {t!r} bary ({b[0]:.3e}, {b[1]:.3e}, {b[2]:.3e})")
-        else:
+        if key in ("rtk", "embree") and val[0] != MISS:
+            lines.append(fmt_hit(key, *val))
+        elif key == "f64 candidates":
+            lines.append(f"    f64 brute force: {len(val)} triangle(s) crossed within 1 % (barycentric)")
+            lines += [fmt_hit("", p, h) for p, h in val[:8]]
+        elif key not in ("rtk", "embree"):
             lines.append(f"    {key}: {val}")
     return "\n".join(lines)
 
@@ -312,31 +427,37 @@ def answer(prim, t, occluded):
     return f"prim {prim} t {t!r}" if prim != MISS else "miss"
 
 
-def compare_set(mesh, name, rtk_out, emb_out, rays, eps, show):
-    """One table row for a set; prints the unexplained (and --show) rays."""
+def compare_set(mesh, name, rtk_out, emb_out, rays, tol, show):
+    """One table row for a set. Prints the unexplained rays, those explained
+    only by the scale-aware tolerance, and the first `show` of each category."""
     occluded = name == "occluded"
+    tol0 = Tol(tol.bary, tol.t, 0)
     (rp, rt, ru, rv), (ep, et) = rtk_out, emb_out
     bad, worst, wi = compare(rp, rt, ep, et)
     note = None if occluded or wi is None else worst_t_note(mesh, rays, wi, rp[wi], rt[wi], et[wi])
-    counts = dict.fromkeys(CATEGORIES, 0)
+    counts = dict.fromkeys(list(LABELS) + ["scaled", "rtk", "embree", "undecided"], 0)
     for i in bad:
         o, d = ray_at(rays, i)
         if occluded:
-            cat, info = classify_occluded(mesh, o, d, eps)
+            cat, verdict, scaled, info = classify_occluded(mesh, o, d, rp[i] != MISS, tol, tol0)
         else:
-            cat, info = classify_nearest(mesh, o, d, rp[i], ep[i], eps)
+            cat, verdict, scaled, info = classify_nearest(mesh, o, d, rp[i], ep[i], tol, tol0)
             if rp[i] != MISS:
                 info["rtk f32 (u, v)"] = (ru[i], rv[i])
         counts[cat] += 1
-        if cat == "unexpl" or counts[cat] <= show:
+        counts[verdict] += 1
+        counts["scaled"] += scaled
+        if cat == "unexpl" or scaled or counts[cat] <= show:
+            if scaled:
+                info["note"] = "explained only with the scale-aware tolerance (--ulps)"
             print(describe(i, o, d, answer(rp[i], rt[i], occluded), answer(ep[i], et[i], occluded),
-                           cat, info), flush=True)
+                           cat, verdict, info), flush=True)
     hits = (sum(1 for p in rp if p != MISS), sum(1 for p in ep if p != MISS))
     return {"set": name, "rays": len(rp), "hits": hits, "mismatches": len(bad),
             "counts": counts, "worst_t": None if occluded else worst, "worst_note": note}
 
 
-def run_mesh(a, path, workdir, eps):
+def run_mesh(a, path, workdir, tol):
     name = os.path.basename(path).removesuffix(".ply")
     mesh = read_ply(path)
     prefix = os.path.join(workdir, name)
@@ -351,7 +472,7 @@ def run_mesh(a, path, workdir, eps):
         n = r["rays"]
         print(f"{name} {set_name}: comparing {n} rays (hash {r['rays_hash']})", flush=True)
         row = compare_set(mesh, set_name, read_rtk_hits(hits, n),
-                          read_embree(f"{prefix}.embree.{key}.bin", n), read_rays(rays_path, n), eps, a.show)
+                          read_embree(f"{prefix}.embree.{key}.bin", n), read_rays(rays_path, n), tol, a.show)
         if row["hits"] != (r["hits"], emb["sets"][key]["hits"]):
             sys.exit(f"{name} {set_name}: hit files disagree with the reported hit counts")
         rows.append(dict(row, mesh=name))
@@ -359,14 +480,17 @@ def run_mesh(a, path, workdir, eps):
 
 
 def table(rows):
-    out = ["| mesh | set | rays | hits rtk | hits Embree | mismatches | tie (shared edge/vertex) "
-           "| graze/silhouette | different surfaces, equal t | unexplained | max rel. t diff (matching hits) |",
-           "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    cats = list(LABELS)
+    out = ["| mesh | set | rays | hits rtk | hits Embree | mismatches | "
+           + " | ".join(LABELS[c] for c in cats)
+           + " | of which via --ulps | f64 sides with rtk / Embree / undecided | max rel. t diff, same prim |",
+           "|---|---|" + "---:|" * (len(cats) + 7)]
     for r in rows:
         c = r["counts"]
         w = "-" if r["worst_t"] is None else f"{r['worst_t']:.2e}"
         out.append(f"| {r['mesh']} | {r['set']} | {r['rays']:,} | {r['hits'][0]:,} | {r['hits'][1]:,} "
-                   f"| {r['mismatches']} | {c['tie']} | {c['graze']} | {c['diff']} | {c['unexpl']} | {w} |")
+                   f"| {r['mismatches']} | " + " | ".join(str(c[k]) for k in cats)
+                   + f" | {c['scaled']} | {c['rtk']} / {c['embree']} / {c['undecided']} | {w} |")
     return "\n".join(out)
 
 
@@ -379,19 +503,21 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--bary-eps", type=float, default=1e-5)
     ap.add_argument("--t-eps", type=float, default=1e-6)
+    ap.add_argument("--ulps", type=float, default=2.0,
+                    help="scale-aware tolerance in f32 ulps of the coordinates / |cos| (0: off)")
     ap.add_argument("--show", type=int, default=0, help="print the first N rays of every category")
     ap.add_argument("--keep", help="folder for the ray and hit files (default: a temporary one)")
     a = ap.parse_args()
-    eps = argparse.Namespace(bary=a.bary_eps, t=a.t_eps)
+    tol = Tol(a.bary_eps, a.t_eps, a.ulps)
     t0 = time.monotonic()
     rows = []
     for path in a.meshes:
         if a.keep:
             os.makedirs(a.keep, exist_ok=True)
-            rows += run_mesh(a, path, a.keep, eps)
+            rows += run_mesh(a, path, a.keep, tol)
         else:
             with tempfile.TemporaryDirectory() as tmp:
-                rows += run_mesh(a, path, tmp, eps)
+                rows += run_mesh(a, path, tmp, tol)
     print()
     print(table(rows))
     print("\nLargest t difference among matching hits, against f64:")
