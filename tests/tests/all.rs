@@ -9,4 +9,5 @@ mod panics;
 mod refusals;
 mod shading;
 mod silhouette;
+mod trace;
 mod whitted;
