@@ -69,6 +69,11 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Distrust the scene: its output and its file parameters (keys named
+    /// `file` or ending in `_file`) must lie inside its folder or the working
+    /// directory, and its output may not be an absolute path.
+    #[arg(long)]
+    safe: bool,
 }
 
 fn main() {
@@ -80,9 +85,20 @@ fn main() {
         Command::Plugins { plugin_path, short } => cmd_plugins(&plugin_path, short),
     };
     if let Err(e) = res {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", printable(&format!("{e:#}")));
         std::process::exit(1);
     }
+}
+
+/// An error message made safe for the terminal: control characters that
+/// reached it from a scene or a file (escape sequences) escaped, and each
+/// line cut to a readable length. The shell's own errors are escaped
+/// already; this covers the host's (paths, output names).
+fn printable(msg: &str) -> String {
+    msg.split('\n')
+        .map(|l| rtk_shell::error::shown(l, rtk_shell::error::MAX_SHOWN_MESSAGE))
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 struct Pool<'a>(&'a rayon::ThreadPool);
@@ -131,17 +147,22 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     let mut file = rtk_shell::SceneFile::read(&a.scene)?;
     file.apply_overrides(&sets)?;
     let desc = rtk_shell::Desc::from_file(&file)?;
+    if a.safe {
+        rtk_shell::safe::check(&file, &desc)?;
+    }
     let parse_time = t_parse.elapsed();
 
     let out = output_path(&a, desc.render.output.as_deref());
     output::check_writable(&out)?;
+    let film = render::Film::new(desc.render.width, desc.render.height)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", a.scene.display()))?;
 
     let mut registry = Registry::new(PluginPath::standard(&a.plugin_path));
     let world = rtk_shell::build(&file, desc, &mut registry, &Pool(&pool))?;
 
     let tracer = tracer::Tracer::new(&world);
     let t_render = Instant::now();
-    let film = render::render(&tracer, &pool, !a.quiet)
+    let film = render::render(&tracer, &pool, !a.quiet, film)
         .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", a.scene.display()))?;
     let render_time = t_render.elapsed();
     let t_write = Instant::now();

@@ -32,7 +32,10 @@ pub fn format_of(path: &Path) -> Result<Format> {
     }
 }
 
-/// Check that the output's folder exists (before spending time rendering).
+/// Check, before spending time rendering, that the output can be written:
+/// its name says a format, it is not a folder, and its folder exists and
+/// takes a new file (tried by creating and removing an empty one: only the
+/// file system knows about read-only mounts, ACLs and quotas).
 pub fn check_writable(path: &Path) -> Result<()> {
     format_of(path)?;
     let dir = parent(path);
@@ -43,7 +46,49 @@ pub fn check_writable(path: &Path) -> Result<()> {
             dir.display()
         );
     }
-    Ok(())
+    if path.is_dir() {
+        bail!("output {}: is a folder", path.display());
+    }
+    let probe = temp_path(path, "probe");
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => bail!(
+            "output {}: cannot write in the folder {}: {e}",
+            path.display(),
+            dir.display()
+        ),
+    }
+}
+
+/// A hidden file beside `path` for this process: `.NAME.PID.KIND`.
+fn temp_path(path: &Path, kind: &str) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    parent(path).join(format!(".{name}.{}.{kind}", std::process::id()))
+}
+
+/// `film`'s pixels converted by `f`, in a buffer allocated fallibly: the
+/// 8-bit or f32 copy of a large image must fail with a message, not abort.
+fn converted<T>(film: &Film, f: impl Fn(f64) -> T) -> Result<Vec<T>> {
+    let mut data = Vec::new();
+    data.try_reserve_exact(film.pixels.len() * 3).map_err(|_| {
+        anyhow::anyhow!(
+            "cannot allocate the {}x{} image to write",
+            film.width,
+            film.height
+        )
+    })?;
+    data.extend(film.pixels.iter().flat_map(|p| p.map(&f)));
+    Ok(data)
 }
 
 fn parent(path: &Path) -> PathBuf {
@@ -71,25 +116,17 @@ pub fn srgb8(v: f64) -> u8 {
 /// Write the film atomically.
 pub fn write(film: &Film, path: &Path) -> Result<()> {
     let fmt = format_of(path)?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = parent(path).join(format!(".{name}.{}.tmp", std::process::id()));
+    let tmp = temp_path(path, "tmp");
     let res = (|| -> Result<()> {
         match fmt {
             Format::Png => {
-                let data: Vec<u8> = film.pixels.iter().flat_map(|p| p.map(srgb8)).collect();
+                let data = converted(film, srgb8)?;
                 let img = image::RgbImage::from_raw(film.width, film.height, data)
                     .context("image size")?;
                 img.save_with_format(&tmp, image::ImageFormat::Png)?;
             }
             Format::Exr => {
-                let data: Vec<f32> = film
-                    .pixels
-                    .iter()
-                    .flat_map(|p| p.map(|v| v as f32))
-                    .collect();
+                let data = converted(film, |v| v as f32)?;
                 let img = image::Rgb32FImage::from_raw(film.width, film.height, data)
                     .context("image size")?;
                 img.save_with_format(&tmp, image::ImageFormat::OpenExr)?;

@@ -188,10 +188,14 @@ pub const RAY_BYTES: usize = 32;
 /// Bytes per hit in a hit file.
 pub const HIT_BYTES: usize = 16;
 
+/// Largest ray file read: 2^27 rays (4 GiB). Like scenes and meshes, a ray
+/// file must be a regular file (a FIFO would block, `/dev/zero` never end).
+pub const MAX_RAY_FILE_BYTES: u64 = (RAY_BYTES as u64) << 27;
+
 /// Read a ray file: per ray, little-endian f32 `ox oy oz dx dy dz t_min t_max`.
 pub fn read_rays(path: &Path) -> Result<Vec<RayRec>> {
-    let bytes =
-        std::fs::read(path).with_context(|| format!("reading rays from {}", path.display()))?;
+    let bytes = rtk_shell::file::read_regular_file(path, MAX_RAY_FILE_BYTES, "ray file")
+        .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
     if bytes.len() % RAY_BYTES != 0 {
         bail!(
             "{}: {} bytes is not a whole number of {RAY_BYTES}-byte rays (ox oy oz dx dy dz t_min t_max, little-endian f32)",

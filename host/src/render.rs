@@ -23,6 +23,34 @@ pub struct Film {
     pub stats: Stats,
 }
 
+/// Bytes of film per pixel: linear RGB in f64.
+const FILM_BYTES_PER_PIXEL: u64 = std::mem::size_of::<[f64; 3]>() as u64;
+
+impl Film {
+    /// A black film of `width` x `height`, allocated before the scene is
+    /// built and fallibly: an image too large for memory fails with a
+    /// message, where an infallible allocation would abort the process. The
+    /// render writes each tile into it as the tile finishes, so no second
+    /// image-sized buffer exists while rendering.
+    pub fn new(width: u32, height: u32) -> Result<Film, String> {
+        let n = width as usize * height as usize;
+        let mut pixels = Vec::new();
+        pixels.try_reserve_exact(n).map_err(|_| {
+            format!(
+                "the film of {width}x{height} pixels needs {} MiB ({FILM_BYTES_PER_PIXEL} bytes a pixel), which could not be allocated: render a smaller image",
+                (n as u64 * FILM_BYTES_PER_PIXEL) >> 20
+            )
+        })?;
+        pixels.resize(n, [0.0; 3]);
+        Ok(Film {
+            width,
+            height,
+            pixels,
+            stats: Stats::default(),
+        })
+    }
+}
+
 /// The first plugin failure of the render, and the flag that stops the other
 /// threads. A failure is recorded in a thread's trace context by the plugin's
 /// SDK shim; the render loop reads the context after every camera sample.
@@ -66,8 +94,14 @@ struct Job<'a, 'w> {
     failure: Failure,
 }
 
-/// Render the world's image on the pool's threads.
-pub fn render(tracer: &Tracer, pool: &rayon::ThreadPool, progress: bool) -> Result<Film, String> {
+/// Render the world's image on the pool's threads into `film` (of the
+/// world's image size, from [`Film::new`]).
+pub fn render(
+    tracer: &Tracer,
+    pool: &rayon::ThreadPool,
+    progress: bool,
+    film: Film,
+) -> Result<Film, String> {
     let r = &tracer.world().desc.render;
     let threads = pool.current_num_threads();
     let job = Job {
@@ -83,22 +117,23 @@ pub fn render(tracer: &Tracer, pool: &rayon::ThreadPool, progress: bool) -> Resu
     };
     let n_tiles = job.tiles_x * r.height.div_ceil(TILE);
     let bar = progress_bar(n_tiles as u64, progress);
-    let tiles: Vec<Tile> = pool.install(|| {
+    let film = Mutex::new(film);
+    pool.install(|| {
         use rayon::prelude::*;
-        (0..n_tiles)
-            .into_par_iter()
-            .map(|t| {
-                let tile = job.tile(t);
-                bar.inc(1);
-                tile
-            })
-            .collect()
+        (0..n_tiles).into_par_iter().for_each(|t| {
+            let tile = job.tile(t);
+            if let Ok(mut f) = film.lock() {
+                job.place(&mut f, tile);
+            }
+            bar.inc(1);
+        })
     });
     bar.finish_and_clear();
     if let Some(msg) = job.failure.first.lock().ok().and_then(|f| f.clone()) {
         return Err(msg);
     }
-    Ok(job.assemble(tiles))
+    film.into_inner()
+        .map_err(|_| "a render thread failed".to_string())
 }
 
 fn progress_bar(n: u64, shown: bool) -> ProgressBar {
@@ -193,24 +228,15 @@ impl Job<'_, '_> {
         Some([sum[0] * inv, sum[1] * inv, sum[2] * inv])
     }
 
-    /// Place the tiles in the film and sum the counters.
-    fn assemble(&self, tiles: Vec<Tile>) -> Film {
-        let (w, h) = (self.width, self.height);
-        let mut film = Film {
-            width: w,
-            height: h,
-            pixels: vec![[0.0; 3]; (w * h) as usize],
-            stats: Stats::default(),
-        };
-        for tile in tiles {
-            let (x0, y0, x1, _) = self.rect(tile.index);
-            let tw = (x1 - x0) as usize;
-            for (i, p) in tile.pixels.into_iter().enumerate() {
-                let (x, y) = (x0 as usize + i % tw, y0 as usize + i / tw);
-                film.pixels[y * w as usize + x] = p;
-            }
-            film.stats.merge(&tile.stats);
+    /// Place a finished tile in the film and add its counters.
+    fn place(&self, film: &mut Film, tile: Tile) {
+        let w = self.width as usize;
+        let (x0, y0, x1, _) = self.rect(tile.index);
+        let tw = (x1 - x0) as usize;
+        for (i, p) in tile.pixels.into_iter().enumerate() {
+            let (x, y) = (x0 as usize + i % tw, y0 as usize + i / tw);
+            film.pixels[y * w + x] = p;
         }
-        film
+        film.stats.merge(&tile.stats);
     }
 }

@@ -113,26 +113,95 @@ impl SceneError {
 impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if let Some(file) = &self.file {
-            write!(f, "{}", file.path.display())?;
+            write!(
+                f,
+                "{}",
+                shown(&file.path.display().to_string(), MAX_SHOWN_PATH)
+            )?;
         }
         match (&self.origin, self.line_col()) {
             (_, Some((line, col))) => write!(f, ":{line}:{col}: ")?,
-            (Origin::CommandLine(s), _) => write!(f, " (from --set {s}): ")?,
+            (Origin::CommandLine(s), _) => {
+                write!(f, " (from --set {}): ", shown(s, MAX_SHOWN_NAME))?
+            }
             _ if self.file.is_some() => f.write_str(": ")?,
             _ => {}
         }
         if !self.object.is_empty() {
-            write!(f, "{}: ", self.object)?;
+            write!(f, "{}: ", shown(&self.object, MAX_SHOWN_NAME))?;
         }
         if !self.key.is_empty() {
-            write!(f, "key `{}`: ", self.key)?;
+            write!(f, "key `{}`: ", shown(&self.key, MAX_SHOWN_NAME))?;
         }
-        f.write_str(&self.message)?;
+        f.write_str(&shown_message(&self.message))?;
         for n in &self.notes {
-            write!(f, "\n  {n}")?;
+            write!(f, "\n  {}", shown(n, MAX_SHOWN_MESSAGE))?;
         }
         Ok(())
     }
+}
+
+/// Longest object path, key or `--set` shown, in characters: a scene may
+/// hold a 10 MB key, and echoing it buries the message.
+pub const MAX_SHOWN_NAME: usize = 120;
+/// Longest path shown.
+const MAX_SHOWN_PATH: usize = 1000;
+/// Longest message or note shown, in characters.
+pub const MAX_SHOWN_MESSAGE: usize = 2000;
+
+/// `s` made safe to print on a terminal: control characters (escape
+/// sequences could rewrite the screen or the title) become `\u{..}` escapes,
+/// and text past `max` characters becomes an ellipsis.
+pub fn shown(s: &str, max: usize) -> String {
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i == max {
+            out.push('…');
+            break;
+        }
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// A message made safe to print: every `quoted` value (the scene's own keys
+/// and values, echoed by rtk or by serde) cut to [`MAX_SHOWN_NAME`]
+/// characters, control characters escaped except the line breaks between a
+/// message's own lines, and the whole cut to [`MAX_SHOWN_MESSAGE`].
+pub fn shown_message(msg: &str) -> String {
+    let quoted_cut: Vec<String> = msg
+        .split('`')
+        .enumerate()
+        .map(|(i, part)| match i % 2 {
+            1 => shown(part, MAX_SHOWN_NAME),
+            _ => part.to_string(),
+        })
+        .collect();
+    shown_lines(&quoted_cut.join("`"), MAX_SHOWN_MESSAGE)
+}
+
+/// [`shown`] line by line (the line breaks kept), the whole cut to `max`
+/// characters.
+fn shown_lines(s: &str, max: usize) -> String {
+    let mut out = String::new();
+    let mut left = max;
+    for (i, line) in s.split('\n').enumerate() {
+        if i > 0 {
+            out.push('\n');
+        }
+        let n = line.chars().count();
+        if n > left {
+            out.push_str(&shown(line, left));
+            break;
+        }
+        out.push_str(&shown(line, usize::MAX));
+        left -= n;
+    }
+    out
 }
 
 impl std::error::Error for SceneError {}
@@ -157,5 +226,22 @@ mod tests {
         let c =
             SceneError::invalid(&Origin::CommandLine("x=1".into()), "", "x", "bad").in_file(&file);
         assert_eq!(c.to_string(), "s.toml (from --set x=1): key `x`: bad");
+    }
+
+    #[test]
+    fn control_characters_are_escaped_and_long_values_cut() {
+        let long = "k".repeat(10_000_000);
+        let e = SceneError::invalid(
+            &Origin::Whole,
+            "objects.\x1b[2J",
+            &long,
+            format!("unknown field `{long}`, \x07expected\none of `a`"),
+        );
+        let s = e.to_string();
+        assert!(s.len() < 1000, "{} bytes shown", s.len());
+        assert!(!s.chars().any(|c| c.is_control() && c != '\n'), "{s:?}");
+        assert!(s.contains("objects.\\u{1b}[2J"), "{s}");
+        assert!(s.contains("…`"), "{s}");
+        assert!(s.contains("\\u{7}expected\none of `a`"), "{s}");
     }
 }

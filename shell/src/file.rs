@@ -4,6 +4,11 @@ use crate::error::{ErrorKind, FileText, SceneError};
 use crate::tree::{self, Node, Origin};
 use std::path::{Path, PathBuf};
 
+/// Largest scene file read: 64 MiB. A scene is text that names its bulk
+/// data (meshes) by file; a larger one is a mistake or an attack, and
+/// reading it whole (`/dev/zero`, a huge file) would exhaust memory.
+pub const MAX_SCENE_BYTES: u64 = 64 << 20;
+
 /// The sections of a scene file, in the order they are documented.
 pub const SECTIONS: [&str; 5] = ["render", "cameras", "lights", "shaders", "objects"];
 
@@ -17,22 +22,36 @@ pub struct SceneFile {
 }
 
 impl SceneFile {
-    /// Read and parse a scene file.
+    /// Read and parse a scene file: a regular file of at most
+    /// [`MAX_SCENE_BYTES`], in UTF-8.
     pub fn read(path: &Path) -> Result<Self, SceneError> {
-        let src = std::fs::read_to_string(path).map_err(|e| {
-            SceneError::new(
-                ErrorKind::Io,
-                &Origin::Whole,
-                "",
-                "",
-                format!("cannot read the scene file: {e}"),
-            )
-            .in_file(&FileText {
+        let io_error = |msg: String| {
+            SceneError::new(ErrorKind::Io, &Origin::Whole, "", "", msg).in_file(&FileText {
                 path: path.to_path_buf(),
                 src: "".into(),
             })
-        })?;
-        Self::parse(path, src)
+        };
+        let bytes = read_regular_file(path, MAX_SCENE_BYTES, "scene file")
+            .map_err(|e| io_error(e.to_string()))?;
+        match String::from_utf8(bytes) {
+            Ok(src) => Self::parse(path, src),
+            Err(e) => {
+                let at = e.utf8_error().valid_up_to();
+                let byte = e.as_bytes()[at];
+                let text = FileText {
+                    path: path.to_path_buf(),
+                    src: String::from_utf8_lossy(e.as_bytes()).into(),
+                };
+                Err(SceneError::new(
+                    ErrorKind::Syntax,
+                    &Origin::File(at..at + 1),
+                    "",
+                    "",
+                    format!("the scene file is not UTF-8 text (byte 0x{byte:02X})"),
+                )
+                .in_file(&text))
+            }
+        }
     }
 
     /// Parse scene text (the path is for messages and relative files).
@@ -89,10 +108,44 @@ impl SceneFile {
                 ),
             ));
         }
-        let node = tree::parse_override_value(s, value.trim());
+        self.check_defined(&keys, &origin)?;
+        let node = tree::parse_override_value(s, value.trim())
+            .map_err(|m| SceneError::invalid(&origin, "", key, m))?;
         self.root
             .set_path(&keys, node)
             .map_err(|m| SceneError::invalid(&origin, "", key, m))
+    }
+
+    /// A `--set` inside a definition (`objects.ball.radius`) needs the
+    /// definition: otherwise a typo in its name would create a definition
+    /// without a class, reported as a missing `class`. A new definition is
+    /// made by setting its `class` first (`--set objects.x.class=sphere`),
+    /// or whole, as a table (`--set 'objects.x={ class = "sphere" }'`).
+    fn check_defined(&self, keys: &[&str], origin: &Origin) -> Result<(), SceneError> {
+        let [section, name, key, ..] = keys else {
+            return Ok(());
+        };
+        let defined = self.root.get(section).and_then(|s| s.get(name)).is_some();
+        if *section == "render" || defined || (keys.len() == 3 && *key == "class") {
+            return Ok(());
+        }
+        let defined: Vec<&str> = match self.root.get(section).map(|s| &s.value) {
+            Some(tree::Val::Table(t)) => t.iter().map(|(k, _, _)| k.as_str()).collect(),
+            _ => Vec::new(),
+        };
+        Err(SceneError::new(
+            ErrorKind::UnknownReference,
+            origin,
+            format!("{section}.{name}"),
+            "",
+            format!(
+                "the scene defines no `{name}` in [{section}]: --set can change a definition's keys; a new definition needs its `class` set first"
+            ),
+        )
+        .note(format!(
+            "{section} defined: {}",
+            if defined.is_empty() { "none".to_string() } else { defined.join(", ") }
+        )))
     }
 
     /// The folder relative file parameters resolve against.
@@ -101,5 +154,113 @@ impl SceneFile {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         }
+    }
+}
+
+/// Why [`read_regular_file`] refused or failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// The file system's error.
+    #[error("cannot read the {what}: {source}")]
+    Io {
+        /// What the file is ("scene file").
+        what: String,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// A FIFO, a device, a socket or a folder.
+    #[error("cannot read the {what}: it is {kind}, not a regular file")]
+    NotRegular {
+        /// What the file should be.
+        what: String,
+        /// What it is ("a FIFO").
+        kind: &'static str,
+    },
+    /// Larger than the limit.
+    #[error("the {what} is {len} bytes, more than rtk's limit of {} MiB for a {what}", .limit >> 20)]
+    TooBig {
+        /// What the file is.
+        what: String,
+        /// Its size (or as much as was read).
+        len: u64,
+        /// The limit, in bytes.
+        limit: u64,
+    },
+}
+
+/// Read a whole regular file of at most `limit` bytes; `what` names it in
+/// messages. Anything but a regular file is refused before it is opened:
+/// opening a FIFO blocks until a writer comes, and a device (`/dev/zero`)
+/// never ends. The file is opened without blocking and checked again through
+/// its handle, in case the path changed in between, and read no further
+/// than the limit, in case it grows.
+pub fn read_regular_file(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>, ReadError> {
+    use std::io::Read;
+    let io = |source: std::io::Error| ReadError::Io {
+        what: what.to_string(),
+        source,
+    };
+    let too_big = |len: u64| ReadError::TooBig {
+        what: what.to_string(),
+        len,
+        limit,
+    };
+    let regular = |meta: &std::fs::Metadata| -> Result<(), ReadError> {
+        if !meta.is_file() {
+            return Err(ReadError::NotRegular {
+                what: what.to_string(),
+                kind: file_kind(meta),
+            });
+        }
+        match meta.len() > limit {
+            true => Err(too_big(meta.len())),
+            false => Ok(()),
+        }
+    };
+    regular(&std::fs::metadata(path).map_err(io)?)?;
+    let file = open_nonblocking(path).map_err(io)?;
+    regular(&file.metadata().map_err(io)?)?;
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
+    match bytes.len() as u64 > limit {
+        true => Err(too_big(bytes.len() as u64)),
+        false => Ok(bytes),
+    }
+}
+
+#[cfg(unix)]
+fn open_nonblocking(path: &Path) -> std::io::Result<std::fs::File> {
+    use std::os::unix::fs::OpenOptionsExt;
+    std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+}
+
+#[cfg(not(unix))]
+fn open_nonblocking(path: &Path) -> std::io::Result<std::fs::File> {
+    std::fs::File::open(path)
+}
+
+/// What a file that is not a regular file is, for messages.
+fn file_kind(meta: &std::fs::Metadata) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = meta.file_type();
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if meta.is_dir() {
+        "a folder"
+    } else {
+        "a special file"
     }
 }

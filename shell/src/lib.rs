@@ -10,7 +10,9 @@
 //! - [`plugins`]: the plugin path and the loader, which refuses a library
 //!   built against another kernel, built with `panic = "abort"`, or that is no
 //!   rtk plugin at all, before any of its code runs;
-//! - [`build`]: creation of the DAG and the [`World`] the renderer uses.
+//! - [`build`]: creation of the DAG and the [`World`] the renderer uses;
+//! - [`safe`]: the `--safe` check that a scene names files only inside its
+//!   folder or the working directory.
 //!
 //! The shell never links a plugin and holds no raw pointer: it knows object
 //! classes only through the kernel's host-side handles
@@ -24,7 +26,9 @@ pub mod build;
 pub mod desc;
 pub mod error;
 pub mod file;
+pub(crate) mod plain;
 pub mod plugins;
+pub mod safe;
 pub mod tree;
 
 pub use build::{build, Parallel, Sequential, Timings, World};

@@ -207,9 +207,13 @@ impl<'de> Visitor<'de> for ValVisitor {
         Ok(Val::Int(v))
     }
     fn visit_u64<E: de::Error>(self, v: u64) -> Result<Val, E> {
-        i64::try_from(v)
-            .map(Val::Int)
-            .map_err(|_| E::custom("integer too large"))
+        i64::try_from(v).map(Val::Int).map_err(|_| out_of_range(v))
+    }
+    fn visit_i128<E: de::Error>(self, v: i128) -> Result<Val, E> {
+        i64::try_from(v).map(Val::Int).map_err(|_| out_of_range(v))
+    }
+    fn visit_u128<E: de::Error>(self, v: u128) -> Result<Val, E> {
+        i64::try_from(v).map(Val::Int).map_err(|_| out_of_range(v))
     }
     fn visit_f64<E>(self, v: f64) -> Result<Val, E> {
         Ok(Val::Float(v))
@@ -244,44 +248,95 @@ impl<'de> Visitor<'de> for ValVisitor {
     }
 }
 
+/// Start of the message of an integer beyond 64 bits (not a syntax error:
+/// shown without that prefix).
+const OUT_OF_RANGE: &str = "the integer ";
+
+/// An integer TOML allows but rtk cannot hold, in plain words (serde would
+/// say "invalid type: integer `N` as i128").
+fn out_of_range<E: de::Error>(v: impl std::fmt::Display) -> E {
+    E::custom(format!(
+        "{OUT_OF_RANGE}{v} is out of range: integers must be between {} and {}",
+        i64::MIN,
+        i64::MAX
+    ))
+}
+
 /// Parse a TOML document. On a syntax error returns the message and the byte
 /// range it concerns.
 pub fn parse(src: &str) -> Result<Node, (String, Option<Range<usize>>)> {
-    let val: Val = toml::from_str(src).map_err(|e| {
-        let msg = e.message().trim_end().to_string();
-        // toml hands a date-time to a spanned value as a private marker.
-        if msg.contains("$__toml_private_datetime") {
-            (
-                "date-times are not used in rtk scenes".to_string(),
-                e.span(),
-            )
-        } else {
-            (format!("TOML syntax error: {msg}"), e.span())
-        }
-    })?;
+    let val: Val = toml::from_str(src).map_err(|e| (toml_message(e.message()), e.span()))?;
     Ok(Node {
         origin: Origin::File(0..src.len()),
         value: val,
     })
 }
 
-/// Parse the value of a `--set key=value`: TOML syntax (`4`, `[1, 2]`,
-/// `"text"`), or a bare word taken as a string.
-pub fn parse_override_value(expr: &str, text: &str) -> Node {
+/// The message of a TOML error, in rtk's words.
+fn toml_message(raw: &str) -> String {
+    let msg = raw.trim_end();
+    if msg.contains("$__toml_private_datetime") {
+        // toml hands a date-time to a spanned value as a private marker.
+        "date-times are not used in rtk scenes".to_string()
+    } else if msg.starts_with(OUT_OF_RANGE) {
+        msg.to_string()
+    } else if msg.contains("recursion limit") || msg.contains("cannot recurse further") {
+        "TOML syntax error: values are nested too deeply".to_string()
+    } else if msg == "integer too large" {
+        format!(
+            "{OUT_OF_RANGE}is out of range: integers must be between {} and {}",
+            i64::MIN,
+            i64::MAX
+        )
+    } else {
+        format!("TOML syntax error: {msg}")
+    }
+}
+
+/// Parse the value of a `--set key=value`. The rule: the value is TOML
+/// (`4`, `[1, 2]`, `"text"`, `{ class = "sphere" }`); text that is not
+/// TOML is taken as a string only when it is a bare word such as `main`,
+/// `out.png` or `meshes/bunny.ply` ([`is_bare_word`]). Anything else —
+/// `[1, 2`, `2x`, `1e999` — is refused: a typo must not become a string
+/// that fails later with a confusing message, or not at all.
+pub fn parse_override_value(expr: &str, text: &str) -> Result<Node, String> {
     let origin = Origin::CommandLine(expr.to_string());
+    if text.is_empty() {
+        return Err("the value is empty: give a TOML value, such as --set key=1".into());
+    }
     let value = match toml::from_str::<Val>(&format!("v = {text}")) {
-        Ok(Val::Table(mut t)) if t.len() == 1 => t
-            .pop()
-            .map(|(_, _, n)| n.value)
-            .unwrap_or(Val::Str(text.into())),
-        _ => Val::Str(text.to_string()),
+        Ok(Val::Table(mut t)) if t.len() == 1 => match t.pop() {
+            Some((_, _, n)) => n.value,
+            None => unreachable!("one entry"),
+        },
+        Ok(_) => return Err(format!("`{text}` is more than one TOML value")),
+        Err(_) if is_bare_word(text) => Val::Str(text.to_string()),
+        Err(e) => {
+            let why = toml_message(e.message());
+            if why.starts_with(OUT_OF_RANGE) {
+                return Err(why);
+            }
+            return Err(format!(
+                "`{text}` is not a TOML value ({why}); write strings other than bare words in quotes: --set 'key=\"...\"'"
+            ));
+        }
     };
     let mut n = Node {
         origin: origin.clone(),
         value,
     };
     reorigin(&mut n, &origin);
-    n
+    Ok(n)
+}
+
+/// A bare word: starts with a letter, `_`, `.` or `/`, and holds only
+/// letters, digits and `_ - . /` (names and relative or absolute paths).
+pub fn is_bare_word(text: &str) -> bool {
+    let ok = |c: char| c.is_alphanumeric() || "_-./".contains(c);
+    text.chars()
+        .next()
+        .is_some_and(|c| c.is_alphabetic() || "_./".contains(c))
+        && text.chars().all(ok)
 }
 
 fn reorigin(n: &mut Node, o: &Origin) {
@@ -334,15 +389,40 @@ mod tests {
         let mut root = parse("[render]\nspp = 1\n").unwrap();
         root.set_path(
             &["render", "spp"],
-            parse_override_value("render.spp=16", "16"),
+            parse_override_value("render.spp=16", "16").unwrap(),
         )
         .unwrap();
         assert!(matches!(
             root.get("render").unwrap().get("spp").unwrap().value,
             Val::Int(16)
         ));
-        let v = parse_override_value("render.camera=main", "main");
+        let v = parse_override_value("render.camera=main", "main").unwrap();
         assert!(matches!(v.value, Val::Str(ref s) if s == "main"));
+        let v = parse_override_value("render.output=out/a.png", "out/a.png").unwrap();
+        assert!(matches!(v.value, Val::Str(ref s) if s == "out/a.png"));
+        for bad in ["[1, 2", "2x", "1e999", "", "a b", "\"open", "-x", "1 2"] {
+            let e = parse_override_value("k", bad).unwrap_err();
+            assert!(
+                e.contains("not a TOML value") || e.contains("empty"),
+                "{bad}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn integers_beyond_64_bits_are_refused_in_plain_words() {
+        for src in [
+            "a = 99999999999999999999",
+            "a = -9223372036854775809",
+            "a = 9223372036854775808",
+        ] {
+            let (msg, span) = parse(src).unwrap_err();
+            assert!(
+                msg.contains("out of range") && !msg.contains("i128"),
+                "{msg}"
+            );
+            assert!(span.is_some());
+        }
     }
 
     #[test]

@@ -3,9 +3,11 @@
 mod aggregates;
 mod bad_scenes;
 mod dropin;
+mod hostile;
 mod hygiene;
 mod loading;
 mod panics;
+mod quadrics;
 mod refusals;
 mod shading;
 mod silhouette;

@@ -99,7 +99,7 @@ fn wrong_type_in_plugin_parameters() {
             "scene.toml:13:10",
             "objects.ball",
             "key `radius`",
-            "invalid type",
+            "expected a number, found the string \"big\"",
         ],
     );
 }

@@ -342,7 +342,7 @@ fn bad_mesh_files_are_clear_errors() {
     let scene = "[render]\nwidth = 8\nheight = 8\nroot = \"m\"\nintegrator = \"normals\"\n[cameras.c]\nclass = \"pinhole\"\n\
                  [objects.m]\nclass = \"mesh\"\nfile = \"FILE\"\n";
     for (file, needle) in [
-        ("bad.obj", "not a readable OBJ file"),
+        ("bad.obj", "bad.obj: line 4: vertex index 7 is out of range"),
         ("missing.ply", "cannot read"),
         ("x.stl", "use .ply or .obj"),
     ] {

@@ -11,6 +11,7 @@ mod real;
 mod slab;
 mod sphere;
 mod triangle;
+pub mod vec;
 
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to, SHADOW_EPSILON};
 pub use real::{gamma, max_of, min_of, Real};
@@ -18,5 +19,5 @@ pub use slab::{slab, RayBoxPrecomp, SlabHit};
 pub use sphere::{intersect_sphere, nearest_root, sphere_point_and_error, SphereHit};
 pub use triangle::{
     intersect_triangle, intersect_triangle_f64, intersect_triangle_sheared, is_degenerate,
-    triangle_point_and_error, RayShear, TriHit,
+    triangle_point_and_error, triangle_point_inset, RayShear, TriHit,
 };

@@ -269,17 +269,79 @@ pub fn intersect_triangle_sheared(
     }
 }
 
-/// The hit point reconstructed from barycentrics (docs/numerics.md rule 6) and its
-/// error bound `γ₇ Σ|bᵢpᵢ|`.
+/// The hit point reconstructed from barycentrics relative to the first vertex,
+/// `p₀ + b₁(p₁ − p₀) + b₂(p₂ − p₀)`, and its error bound
+/// `γ₃(|b₁e₁| + |b₂e₂|) + γ₁|p|` (docs/numerics.md rule 3).
+///
+/// Why relative to `p₀` rather than pbrt's `Σ bᵢpᵢ` with bound `γ₇ Σ|bᵢpᵢ|`:
+/// far from the origin the edges are small next to the coordinates, so the
+/// bound is about half as wide; and where all three vertices share a
+/// coordinate (faces of boxes, floors, walls) that coordinate is exact and
+/// its error is zero, so the point stays on the near side of a neighbouring
+/// face. Rounding is monotone, so on such a face the point never leaves the
+/// half-spaces of the faces around it, which is what keeps reflected rays
+/// inside a closed box (numerics.md S5). Errors in the barycentrics move the
+/// point along the plane, not off it, as in pbrt.
 #[inline]
 pub fn triangle_point_and_error(p: [[f32; 3]; 3], b: [f32; 3]) -> ([f32; 3], [f32; 3]) {
     let mut out = [0.0f32; 3];
-    let mut abs = [0.0f32; 3];
+    let mut err = [0.0f32; 3];
     for i in 0..3 {
-        out[i] = b[0] * p[0][i] + b[1] * p[1][i] + b[2] * p[2][i];
-        abs[i] = (b[0] * p[0][i]).abs() + (b[1] * p[1][i]).abs() + (b[2] * p[2][i]).abs();
+        let e1 = p[1][i] - p[0][i];
+        let e2 = p[2][i] - p[0][i];
+        if e1 == 0.0 && e2 == 0.0 {
+            // Equal f32 coordinates subtract to an exact zero: the sum is p₀.
+            out[i] = p[0][i];
+            continue;
+        }
+        let (d1, d2) = (b[1] * e1, b[2] * e2);
+        out[i] = p[0][i] + (d1 + d2);
+        err[i] = gamma::<f32>(3) * (d1.abs() + d2.abs()) + gamma::<f32>(1) * out[i].abs();
     }
-    (out, abs.map(|a| gamma::<f32>(7) * a))
+    (out, err)
+}
+
+/// [`triangle_point_and_error`], with the point moved into the triangle until
+/// it is twice its error bound from every edge (or to the centroid of a
+/// triangle too small for that).
+///
+/// Why: a point within its error of an edge may lie outside the neighbouring
+/// face's half-space, and a ray reflected from there towards that face starts
+/// behind it, misses it, and leaves a closed mirror box (the house of mirrors,
+/// docs/numerics.md S5). The normal offset cannot help: it clears only the
+/// face being left. Moving the point along the face, away from the edge, puts
+/// it strictly inside the wedge the two faces enclose, whatever the arriving
+/// direction; the move is a few ulps along the surface, far below anything a
+/// shader can see. Spawned rays start here; shading keeps the barycentrics.
+#[inline]
+pub fn triangle_point_inset(p: [[f32; 3]; 3], b: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    let (q, err) = triangle_point_and_error(p, b);
+    // The L1 length bounds the error box's diagonal.
+    let m = 2.0 * (err[0] + err[1] + err[2]);
+    let v = p.map(glam::Vec3::from);
+    let area2 = (v[1] - v[0]).cross(v[2] - v[0]).length();
+    if m == 0.0 || !(area2 > 0.0 && area2.is_finite()) {
+        return (q, err);
+    }
+    // Distance to the edge opposite vertex k is b_k times that edge's height.
+    let edge = [
+        (v[2] - v[1]).length(),
+        (v[0] - v[2]).length(),
+        (v[1] - v[0]).length(),
+    ];
+    let floor = edge.map(|e| m * e / area2);
+    if (0..3).all(|k| b[k] >= floor[k]) {
+        return (q, err);
+    }
+    let spare = 1.0 - (floor[0] + floor[1] + floor[2]);
+    let b = if spare > 0.0 {
+        let above = std::array::from_fn::<f32, 3, _>(|k| (b[k] - floor[k]).max(0.0));
+        let total = above[0] + above[1] + above[2];
+        std::array::from_fn(|k| floor[k] + above[k] * (spare / total))
+    } else {
+        [1.0 / 3.0; 3]
+    };
+    triangle_point_and_error(p, b)
 }
 
 #[cfg(test)]
@@ -472,6 +534,57 @@ mod tests {
         }
     }
 
+    /// The inset point stays on the plane within its bound and ends up
+    /// farther from every edge than its error box reaches, even for hits
+    /// exactly on an edge or a vertex.
+    #[test]
+    fn inset_point_clears_every_edge() {
+        use glam::DVec3;
+        let mut s = crate::RngState::seeded(9);
+        let mut checked = 0;
+        for &c in &[0.0, 1e3, 1e5] {
+            for _ in 0..5_000 {
+                let p: [[f32; 3]; 3] = std::array::from_fn(|_| {
+                    std::array::from_fn(|_| (c + s.next_f64() * 4.0 - 2.0) as f32)
+                });
+                // Barycentrics on an edge, at a vertex, or anywhere.
+                let mut b1 = s.next_f64() as f32;
+                let mut b2 = (s.next_f64() as f32) * (1.0 - b1);
+                match s.next_f64() {
+                    x if x < 0.3 => b2 = 0.0,
+                    x if x < 0.4 => (b1, b2) = (0.0, 0.0),
+                    x if x < 0.6 => b2 = 1.0 - b1,
+                    _ => {}
+                }
+                let (q, e) = triangle_point_inset(p, [1.0 - b1 - b2, b1, b2]);
+                let v = p.map(|x| DVec3::from(x.map(f64::from)));
+                let n = (v[1] - v[0]).cross(v[2] - v[0]);
+                if n.length() < 1e-3 {
+                    continue;
+                }
+                let n = n.normalize();
+                let q = DVec3::from(q.map(f64::from));
+                let e = DVec3::from(e.map(f64::from));
+                let reach = e.x + e.y + e.z;
+                // Too small to clear its edges by twice its error: the centroid.
+                let perimeter: f64 = (0..3).map(|k| (v[(k + 1) % 3] - v[k]).length()).sum();
+                if 2.0 * reach * perimeter >= (v[1] - v[0]).cross(v[2] - v[0]).length() {
+                    continue;
+                }
+                assert!(((q - v[0]).dot(n)).abs() <= n.abs().dot(e), "off the plane");
+                for k in 0..3 {
+                    let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
+                    // Signed distance into the triangle from edge a-b.
+                    let inward = n.cross(b - a).normalize();
+                    let d = (q - a).dot(inward);
+                    assert!(d > reach, "edge {k}: {d} <= {reach} at |c| = {c}");
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 12_000, "only {checked} triangles checked");
+    }
+
     #[test]
     fn point_error_bounds_hold_against_f64() {
         let mut s = crate::RngState::seeded(5);
@@ -484,7 +597,10 @@ mod tests {
             let b = [1.0 - b0 - b1, b0, b1];
             let (q, e) = triangle_point_and_error(p, b);
             for i in 0..3 {
-                let exact: f64 = (0..3).map(|k| b[k] as f64 * p[k][i] as f64).sum();
+                // The plane point the barycentrics name: b₀ is implied by b₁, b₂.
+                let v0 = p[0][i] as f64;
+                let exact =
+                    v0 + b[1] as f64 * (p[1][i] as f64 - v0) + b[2] as f64 * (p[2][i] as f64 - v0);
                 assert!((q[i] as f64 - exact).abs() <= e[i] as f64);
             }
         }

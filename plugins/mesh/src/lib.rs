@@ -1,8 +1,10 @@
 #![doc = include_str!("../README.md")]
 
 mod load;
+mod obj;
+mod ply;
 
-use rtk_kernel::geom::{intersect_triangle, triangle_point_and_error};
+use rtk_kernel::geom::{intersect_triangle, triangle_point_inset};
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -147,9 +149,7 @@ impl Plugin for Mesh {
 
 impl Object for Mesh {
     fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
-        let bytes = env.read_file(&self.path).map_err(|e| {
-            PluginError::key("file", format!("cannot read {}: {e}", self.path.display()))
-        })?;
+        let bytes = load::read_file(env, &self.path)?;
         let m = load::load(&self.path, &bytes)?;
         self.p = m.positions;
         self.tris = m.tris;
@@ -217,7 +217,7 @@ impl Object for Mesh {
         let i = e.prim;
         let v = self.verts(i);
         let b = [1.0 - e.uv[0] - e.uv[1], e.uv[0], e.uv[1]];
-        let (p, err) = triangle_point_and_error(v, b);
+        let (p, err) = triangle_point_inset(v, b);
         let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
         let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
         out.p = Vec3::from(p).into();

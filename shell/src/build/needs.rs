@@ -143,10 +143,10 @@ fn load_needs(
                 &n.object,
                 "class",
                 format!(
-                    "class `{}` is a {} plugin, but a {} is needed here",
+                    "class `{}` is {} plugin, but {} is needed here",
                     n.class,
-                    p.kind.name(),
-                    n.kind.name()
+                    with_article(p.kind.name()),
+                    with_article(n.kind.name())
                 ),
             ));
         }
@@ -155,6 +155,14 @@ fn load_needs(
         }
     }
     Ok(())
+}
+
+/// "an object", "a camera".
+fn with_article(word: &str) -> String {
+    match word.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        true => format!("an {word}"),
+        false => format!("a {word}"),
+    }
 }
 
 fn class_error(e: ClassError, n: &Need) -> SceneError {

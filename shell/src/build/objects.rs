@@ -266,7 +266,10 @@ pub(crate) fn call_error(def: &Def, attrs: Option<&Node>, what: &str, e: CallErr
     let msg = if e.panicked {
         format!("plugin `{class}` {e}")
     } else {
-        format!("plugin `{class}` refused {what}: {}", e.message)
+        format!(
+            "plugin `{class}` refused {what}: {}",
+            crate::plain::plain_message(&e.message)
+        )
     };
     SceneError::new(ErrorKind::PluginCall, &origin, object, e.key, msg)
 }
@@ -285,7 +288,11 @@ fn child_refused(od: &ObjDef, inst: &Instance, e: CallError) -> SceneError {
             "plugin `{}` refused child `{}`: {}",
             od.def.class,
             inst.object,
-            if e.panicked { e.to_string() } else { e.message }
+            if e.panicked {
+                e.to_string()
+            } else {
+                crate::plain::plain_message(&e.message)
+            }
         ),
     )
 }

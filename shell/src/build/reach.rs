@@ -42,23 +42,32 @@ impl Reach {
             path: Vec::new(),
         };
         let root = &desc.render.root;
-        let d = w.visit(root)?;
+        let d = w.visit(root, 0)?;
         if d > HIT_STACK_DEPTH {
-            return Err(SceneError::new(
-                ErrorKind::Cycle,
-                &root.origin,
-                "render",
-                "root",
-                format!("the object DAG is {d} levels deep (transforms count as a level); rtk traces at most {HIT_STACK_DEPTH}"),
-            ));
+            return Err(too_deep(root, &format!("{d} levels deep")));
         }
         Ok(w.reach)
     }
 }
 
+/// The error for a DAG deeper than the hit stack, at `inst`.
+fn too_deep(inst: &Instance, how: &str) -> SceneError {
+    SceneError::new(
+        ErrorKind::Cycle,
+        &inst.object_origin,
+        &inst.path,
+        "object",
+        format!("the object DAG is {how} (transforms count as a level); rtk traces at most {HIT_STACK_DEPTH}"),
+    )
+}
+
 impl Walk<'_> {
-    /// Visit an instance; returns the number of levels it occupies.
-    fn visit(&mut self, inst: &Instance) -> Result<usize, SceneError> {
+    /// Visit an instance `above` levels below the root; returns the number
+    /// of levels it occupies. The walk stops as soon as a path is deeper
+    /// than the hit stack, so its recursion is bounded by
+    /// [`HIT_STACK_DEPTH`] whatever the scene (a chain of 20,000 instances
+    /// is refused, not a stack overflow).
+    fn visit(&mut self, inst: &Instance, above: usize) -> Result<usize, SceneError> {
         if let Some(s) = &inst.shader {
             self.reach.shaders.insert(s.clone());
         }
@@ -77,15 +86,28 @@ impl Walk<'_> {
                 format!("instancing cycle: {}", cycle.join(" -> ")),
             ));
         }
+        let here = above + transform_level + 1;
         if let Some(d) = self.depth.get(&inst.object) {
+            if above + transform_level + d > HIT_STACK_DEPTH {
+                return Err(too_deep(
+                    inst,
+                    &format!("more than {HIT_STACK_DEPTH} levels deep here"),
+                ));
+            }
             return Ok(d + transform_level);
+        }
+        if here > HIT_STACK_DEPTH {
+            return Err(too_deep(
+                inst,
+                &format!("more than {HIT_STACK_DEPTH} levels deep here"),
+            ));
         }
         self.reach.objects.insert(inst.object.clone());
         self.path.push(inst.object.clone());
         let desc = self.desc;
         let mut deepest = 0;
         for c in &desc.objects[&inst.object].children {
-            deepest = deepest.max(self.visit(c)?);
+            deepest = deepest.max(self.visit(c, here)?);
         }
         self.path.pop();
         let d = 1 + deepest;

@@ -3,6 +3,11 @@
 use crate::error::SceneError;
 use crate::tree::{Node, Origin, Val};
 
+/// Largest coordinate, translation, scale or radiance the shell accepts:
+/// the kernel's [`MAX_COORDINATE`](rtk_kernel::params::MAX_COORDINATE), in
+/// f64 (beyond it f32 intersection loses all precision).
+pub(crate) const MAX_COORDINATE: f64 = 1e12;
+
 /// The entries of a table.
 pub(crate) fn table<'n>(
     n: &'n Node,
@@ -98,13 +103,27 @@ pub(crate) fn unknown_keys(n: &Node, object: &str, allowed: &[&str]) -> Result<(
     Ok(())
 }
 
-/// A value as JSON for a plugin (NaN and infinities refused).
+/// A value as JSON for a plugin. NaN and infinities are refused, and so are
+/// numbers beyond f32's range: plugins read numbers as f32, where `1e39`
+/// would arrive as infinity and be refused in words that no longer match
+/// what the scene says.
 pub(crate) fn json(n: &Node, object: &str, key: &str) -> Result<serde_json::Value, SceneError> {
     use serde_json::Value as J;
     Ok(match &n.value {
         Val::Str(s) => J::String(s.clone()),
         Val::Int(i) => J::from(*i),
         Val::Bool(b) => J::Bool(*b),
+        Val::Float(f) if f.is_finite() && f.abs() > f32::MAX as f64 => {
+            return Err(SceneError::invalid(
+                &n.origin,
+                object,
+                key,
+                format!(
+                    "{f:e} is too large: rtk computes in f32, whose numbers end at {:e}",
+                    f32::MAX
+                ),
+            ))
+        }
         Val::Float(f) => match serde_json::Number::from_f64(*f) {
             Some(x) if f.is_finite() => J::Number(x),
             _ => {
@@ -138,4 +157,15 @@ pub(crate) fn json(n: &Node, object: &str, key: &str) -> Result<serde_json::Valu
             J::Object(m)
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_shell_s_limit_is_the_kernel_s() {
+        assert_eq!(
+            super::MAX_COORDINATE as f32,
+            rtk_kernel::params::MAX_COORDINATE
+        );
+    }
 }

@@ -68,7 +68,7 @@ impl Def {
             name: name.to_string(),
             class,
             class_origin: cn.origin.clone(),
-            node: n.clone(),
+            node: without_children(n),
             params: params_json(n, &object, &skip_all)?,
         })
     }
@@ -86,6 +86,33 @@ impl Def {
             },
             params: "{}".into(),
         }
+    }
+}
+
+/// A definition's table for locating its plugin's errors, with `children`
+/// emptied: a plugin's error never lies inside the instances, and copying
+/// them would double the memory of a scene with many instances.
+fn without_children(n: &Node) -> Node {
+    let Val::Table(t) = &n.value else {
+        return n.clone();
+    };
+    let entries = t
+        .iter()
+        .map(|(k, ko, v)| match k.as_str() {
+            "children" => (
+                k.clone(),
+                ko.clone(),
+                Node {
+                    origin: v.origin.clone(),
+                    value: Val::Arr(Vec::new()),
+                },
+            ),
+            _ => (k.clone(), ko.clone(), v.clone()),
+        })
+        .collect();
+    Node {
+        origin: n.origin.clone(),
+        value: Val::Table(entries),
     }
 }
 

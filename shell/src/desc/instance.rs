@@ -124,14 +124,97 @@ fn transform(n: &Node, path: &str) -> Result<DAffine3, SceneError> {
         } else {
             "transform".to_string()
         };
-        SceneError::invalid(&steps.locate_origin(&e.key), path, key, e.message)
+        SceneError::invalid(
+            &steps.locate_origin(&e.key),
+            path,
+            key,
+            crate::plain::plain_message(&e.message),
+        )
     })?;
-    xform::compose("", &parsed).map_err(|e| {
+    let m = xform::compose("", &parsed).map_err(|e| {
         SceneError::invalid(
             &steps.locate_origin(&e.key),
             path,
             format!("transform{}", e.key),
             e.message,
         )
-    })
+    })?;
+    check_range(&steps, &parsed, path)?;
+    Ok(m)
+}
+
+/// Largest translation and scale of an instance transform, and the inverse
+/// of the smallest scale: beyond them the f32 transform of a ray loses the
+/// instance (it silently vanishes from the image) or overflows.
+const MAX_TRANSFORM: f64 = super::check::MAX_COORDINATE;
+
+/// Refuse, naming the first step that goes out of range, a transform
+/// whose translation or scale leaves what f32 can trace ([`MAX_TRANSFORM`]).
+/// The steps were checked one by one already, so composing them cannot fail.
+fn check_range(steps: &Node, parsed: &[xform::Step], path: &str) -> Result<(), SceneError> {
+    let mut m = DAffine3::IDENTITY;
+    for (i, s) in parsed.iter().enumerate() {
+        let Ok(one) = xform::compose("", std::slice::from_ref(s)) else {
+            continue;
+        };
+        m = one * m;
+        if let Some(why) = out_of_range(&m) {
+            let key = format!("[{i}].{}", step_key(s));
+            return Err(SceneError::invalid(
+                &steps.locate_origin(&key),
+                path,
+                format!("transform{key}"),
+                why,
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Why a composed transform is out of range, if it is.
+fn out_of_range(m: &DAffine3) -> Option<String> {
+    let largest = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let t = m.translation.to_array();
+    if let Some(axis) = (0..3).find(|&i| t[i].abs() > MAX_TRANSFORM) {
+        return Some(format!(
+            "moves the instance by {:e} along {}, beyond ±{MAX_TRANSFORM:e}: f32 intersection cannot trace it there",
+            t[axis],
+            ["x", "y", "z"][axis]
+        ));
+    }
+    if largest(&m.matrix3.to_cols_array()) > MAX_TRANSFORM {
+        return Some(format!(
+            "scales by more than {MAX_TRANSFORM:e}: f32 intersection cannot trace the result"
+        ));
+    }
+    if largest(&m.matrix3.inverse().to_cols_array()) > MAX_TRANSFORM {
+        return Some(format!(
+            "scales by less than {:e}: f32 intersection cannot trace the result",
+            1.0 / MAX_TRANSFORM
+        ));
+    }
+    None
+}
+
+/// The key of a step (each step has exactly one, checked already).
+fn step_key(s: &xform::Step) -> &'static str {
+    match s {
+        xform::Step {
+            translate: Some(_), ..
+        } => "translate",
+        xform::Step { scale: Some(_), .. } => "scale",
+        xform::Step {
+            rotate_x: Some(_), ..
+        } => "rotate_x",
+        xform::Step {
+            rotate_y: Some(_), ..
+        } => "rotate_y",
+        xform::Step {
+            rotate_z: Some(_), ..
+        } => "rotate_z",
+        xform::Step {
+            rotate: Some(_), ..
+        } => "rotate",
+        _ => "matrix",
+    }
 }

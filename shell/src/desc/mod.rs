@@ -19,7 +19,7 @@ pub use render::{Render, MAX_PIXELS};
 
 use crate::error::{ErrorKind, SceneError};
 use crate::file::{SceneFile, SECTIONS};
-use crate::tree::Node;
+use crate::tree::{Node, Val};
 use std::collections::BTreeMap;
 
 /// A checked scene description.
@@ -45,6 +45,7 @@ impl Desc {
 
     fn read(root: &Node) -> Result<Desc, SceneError> {
         check::unknown_keys(root, "", &SECTIONS)?;
+        check_instance_count(root)?;
         let cameras = defs_of(root, "cameras")?;
         let lights = defs_of(root, "lights")?;
         let shaders = defs_of(root, "shaders")?;
@@ -105,6 +106,38 @@ impl Desc {
         }
         Ok(())
     }
+}
+
+/// Most instances a scene may have: entries of `children` arrays, over all
+/// definitions. Reading a transformed instance takes about 4 KB at the peak
+/// (most of it the TOML parser's own tree), so a scene at the limit needs
+/// about 4.5 GB; refusing above it is better than being killed for memory.
+pub const MAX_INSTANCES: usize = 1 << 20;
+
+/// Refuse a scene with more than [`MAX_INSTANCES`] instances, before any
+/// instance is read.
+fn check_instance_count(root: &Node) -> Result<(), SceneError> {
+    let Some(Val::Table(objects)) = root.get("objects").map(|o| &o.value) else {
+        return Ok(());
+    };
+    let mut total = 0usize;
+    for (name, _, def) in objects {
+        let Some(c) = def.get("children") else {
+            continue;
+        };
+        if let Val::Arr(items) = &c.value {
+            total += items.len();
+            if total > MAX_INSTANCES {
+                return Err(SceneError::invalid(
+                    &c.origin,
+                    format!("objects.{name}"),
+                    "children",
+                    format!("the scene has more than {MAX_INSTANCES} instances, rtk's limit: instance a group of instances instead (a DAG), or split the scene"),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The `(name, table)` entries of a section (empty when absent).

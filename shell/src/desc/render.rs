@@ -171,7 +171,12 @@ fn integrator(r: &Node) -> Result<Def, SceneError> {
     }
 }
 
-/// `background = [r, g, b]`, finite and not negative; black by default.
+/// Largest background radiance: the limit the plugins' colours have
+/// ([`rtk_kernel::params::color`]); larger values overflow f32 once scaled.
+const MAX_RADIANCE: f64 = super::check::MAX_COORDINATE;
+
+/// `background = [r, g, b]`, finite, not negative, at most [`MAX_RADIANCE`];
+/// black by default.
 fn background(r: &Node) -> Result<[f32; 3], SceneError> {
     let Some(n) = r.get("background") else {
         return Ok([0.0; 3]);
@@ -202,6 +207,14 @@ fn background(r: &Node) -> Result<[f32; 3], SceneError> {
                 OBJ,
                 key,
                 "must not be negative",
+            ));
+        }
+        if v > MAX_RADIANCE {
+            return Err(SceneError::invalid(
+                &c.origin,
+                OBJ,
+                key,
+                format!("{v:e} is too large: radiance must be at most {MAX_RADIANCE:e}, as for the plugins' colours (f32 arithmetic overflows beyond)"),
             ));
         }
         out[i] = v as f32;

@@ -1,0 +1,172 @@
+#![doc = include_str!("../README.md")]
+
+mod shape;
+use rtk_kernel::geom::vec;
+
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::*;
+use shape::Cone;
+use std::f32::consts::TAU;
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {
+    #[serde(default = "up")]
+    apex: [f32; 3],
+    #[serde(default = "down")]
+    axis: [f32; 3],
+    #[serde(default)]
+    height: Option<f32>,
+    #[serde(default = "one")]
+    radius: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+fn down() -> [f32; 3] {
+    [0.0, -1.0, 0.0]
+}
+
+struct ConeObject {
+    cone: Cone<f32>,
+    bounds: Bounds3,
+}
+
+/// A length: finite, positive, within what f32 handles.
+fn length(key: &str, r: f32) -> Result<f32, PluginError> {
+    if !r.is_finite() || r <= 0.0 {
+        return Err(PluginError::key(
+            key,
+            format!("must be a positive number, got {r}"),
+        ));
+    }
+    if !(f32::MIN_POSITIVE..=params::MAX_COORDINATE).contains(&r) {
+        return Err(PluginError::key(
+            key,
+            format!("{r:e} is outside the range f32 handles (1.2e-38 to 1e12)"),
+        ));
+    }
+    Ok(r)
+}
+
+impl Plugin for ConeObject {
+    type Params = Params;
+
+    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+        let apex = params::point("apex", p.apex)?;
+        params::direction("axis", p.axis)?;
+        let r = length("radius", p.radius)?;
+        let axis = p.axis.map(f64::from);
+        let len = vec::norm64(axis);
+        let h = match p.height {
+            Some(h) => length("height", h)? as f64,
+            None => length("axis", len as f32).map_err(|e| {
+                PluginError::key("axis", format!("its length is the height: {}", e.message))
+            })? as f64,
+        };
+        let axis = axis.map(|c| c / len * h);
+        let a64 = apex.to_array().map(f64::from);
+        let base: [f64; 3] = std::array::from_fn(|i| a64[i] + axis[i]);
+        let e = vec::circle_extent(vec::frame64(axis)[2], r as f64);
+        let (lo, hi) = vec::f32_box(
+            std::array::from_fn(|i| a64[i].min(base[i] - e[i])),
+            std::array::from_fn(|i| a64[i].max(base[i] + e[i])),
+        );
+        Ok(ConeObject {
+            cone: Cone::new(a64, axis, r as f64),
+            bounds: Bounds3::new(Vec3::from(lo), Vec3::from(hi)),
+        })
+    }
+}
+
+impl ConeObject {
+    #[inline]
+    fn root(&self, ray: &Ray) -> Option<f32> {
+        self.cone.intersect(
+            ray.origin.to_array(),
+            ray.dir.to_array(),
+            ray.t_min,
+            ray.t_max,
+        )
+    }
+}
+
+impl Object for ConeObject {
+    fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
+        self.bounds
+    }
+
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
+        ctx.stats.prim_tests += 1;
+        match self.root(ray) {
+            Some(t) => {
+                hit.record_leaf(level, t, 0, [0.0, 0.0]);
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, _level: u32) -> bool {
+        ctx.stats.prim_tests += 1;
+        self.root(ray).is_some()
+    }
+
+    fn local_geom(
+        &self,
+        _ctx: &mut TraceCtx,
+        ray: &Ray,
+        hit: &Hit,
+        _level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        let s = self
+            .cone
+            .surface(ray.origin.to_array(), ray.dir.to_array(), hit.t);
+        let n = Vec3::from(s.n).normalize_or(Vec3::from(self.cone.frame[0]));
+        out.p = Vec3::from(s.p).into();
+        out.p_err = Vec3::from(s.p_err).into();
+        out.ng = n.into();
+        out.ns = n.into();
+        out.filled |= geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL;
+        if mask & (geom_mask::UV | geom_mask::TANGENTS) != 0 {
+            // u = phi / 2pi around the axis, v = z / height: 0 at the apex,
+            // 1 on the rim. dpdu x dpdv points outwards.
+            let [x, y, z] = s.local;
+            let [fu, fv, fw] = self.cone.frame.map(Vec3::from);
+            let (h, k) = (self.cone.h, self.cone.k);
+            let rho = (x * x + y * y).sqrt();
+            let phi = y.atan2(x).rem_euclid(TAU);
+            out.uv = [phi / TAU, (z / h).clamp(0.0, 1.0)];
+            let (c, sn) = if rho > 0.0 {
+                (x / rho, y / rho)
+            } else {
+                (1.0, 0.0)
+            };
+            let dpdu = (fv * x - fu * y) * TAU;
+            // At the apex dpdu vanishes: use the direction of increasing phi.
+            let dpdu = if dpdu.length_squared() > 0.0 {
+                dpdu
+            } else {
+                fv * c - fu * sn
+            };
+            out.dpdu = dpdu.into();
+            out.dpdv = (((fu * c + fv * sn) * k + fw) * h).into();
+            out.filled |= geom_mask::UV | geom_mask::TANGENTS;
+        }
+    }
+}
+
+rtk_kernel::export_object!(
+    ConeObject,
+    class = "cone",
+    doc = include_str!("../README.md")
+);

@@ -1,0 +1,162 @@
+#![doc = include_str!("../README.md")]
+
+mod shape;
+use rtk_kernel::geom::vec;
+
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::*;
+use shape::Disk;
+use std::f32::consts::TAU;
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {
+    #[serde(default)]
+    center: [f32; 3],
+    #[serde(default = "up")]
+    normal: [f32; 3],
+    #[serde(default = "one")]
+    radius: f32,
+    #[serde(default)]
+    inner_radius: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+struct DiskObject {
+    disk: Disk<f32>,
+    bounds: Bounds3,
+}
+
+/// A radius: finite, positive, within what f32 handles.
+fn radius(key: &str, r: f32) -> Result<f32, PluginError> {
+    if !r.is_finite() || r <= 0.0 {
+        return Err(PluginError::key(
+            key,
+            format!("must be a positive number, got {r}"),
+        ));
+    }
+    if !(f32::MIN_POSITIVE..=params::MAX_COORDINATE).contains(&r) {
+        return Err(PluginError::key(
+            key,
+            format!("{r:e} is outside the range f32 handles (1.2e-38 to 1e12)"),
+        ));
+    }
+    Ok(r)
+}
+
+impl Plugin for DiskObject {
+    type Params = Params;
+
+    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+        let c = params::point("center", p.center)?;
+        params::direction("normal", p.normal)?;
+        let r = radius("radius", p.radius)?;
+        if !p.inner_radius.is_finite() || p.inner_radius < 0.0 || p.inner_radius >= r {
+            return Err(PluginError::key(
+                "inner_radius",
+                format!(
+                    "must be at least 0 and less than radius ({r}), got {}",
+                    p.inner_radius
+                ),
+            ));
+        }
+        let c64 = c.to_array().map(f64::from);
+        let n64 = p.normal.map(f64::from);
+        let disk = Disk::new(c64, n64, r as f64, p.inner_radius as f64);
+        let e = vec::circle_extent(vec::frame64(n64)[2], r as f64);
+        let (lo, hi) = vec::f32_box(
+            std::array::from_fn(|i| c64[i] - e[i]),
+            std::array::from_fn(|i| c64[i] + e[i]),
+        );
+        Ok(DiskObject {
+            disk,
+            bounds: Bounds3::new(Vec3::from(lo), Vec3::from(hi)),
+        })
+    }
+}
+
+impl DiskObject {
+    #[inline]
+    fn root(&self, ray: &Ray) -> Option<f32> {
+        self.disk.intersect(
+            ray.origin.to_array(),
+            ray.dir.to_array(),
+            ray.t_min,
+            ray.t_max,
+        )
+    }
+}
+
+impl Object for DiskObject {
+    fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
+        self.bounds
+    }
+
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
+        ctx.stats.prim_tests += 1;
+        match self.root(ray) {
+            Some(t) => {
+                hit.record_leaf(level, t, 0, [0.0, 0.0]);
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, _level: u32) -> bool {
+        ctx.stats.prim_tests += 1;
+        self.root(ray).is_some()
+    }
+
+    fn local_geom(
+        &self,
+        _ctx: &mut TraceCtx,
+        ray: &Ray,
+        hit: &Hit,
+        _level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        let s = self
+            .disk
+            .surface(ray.origin.to_array(), ray.dir.to_array(), hit.t);
+        let [fu, fv, fw] = self.disk.frame.map(Vec3::from);
+        out.p = Vec3::from(s.p).into();
+        out.p_err = Vec3::from(s.p_err).into();
+        out.ng = fw.into();
+        out.ns = fw.into();
+        out.filled |= geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL;
+        if mask & (geom_mask::UV | geom_mask::TANGENTS) != 0 {
+            // u = phi / 2pi around the normal from the frame's u axis,
+            // v = (radius - rho) / (radius - inner_radius), as pbrt's disk.
+            let [x, y] = s.xy;
+            let rho = (x * x + y * y).sqrt();
+            let (r, ri) = (self.disk.r, self.disk.ri);
+            let phi = y.atan2(x).rem_euclid(TAU);
+            out.uv = [phi / TAU, ((r - rho) / (r - ri)).clamp(0.0, 1.0)];
+            let (dpdu, dpdv) = if rho > 0.0 {
+                let radial = (fu * x + fv * y) / rho;
+                ((fv * x - fu * y) * TAU, -radial * (r - ri))
+            } else {
+                (fv * (TAU * r), -fu * (r - ri))
+            };
+            out.dpdu = dpdu.into();
+            out.dpdv = dpdv.into();
+            out.filled |= geom_mask::UV | geom_mask::TANGENTS;
+        }
+    }
+}
+
+rtk_kernel::export_object!(
+    DiskObject,
+    class = "disk",
+    doc = include_str!("../README.md")
+);
