@@ -4,6 +4,7 @@
 mod output;
 mod rays;
 mod render;
+mod stress;
 mod trace;
 mod tracer;
 
@@ -32,6 +33,9 @@ enum Command {
     /// Cast rays (a ray file, or the Embree anchor's sets) against a scene or
     /// a mesh under any aggregate: throughput, build time, memory, checksums.
     Trace(trace::TraceArgs),
+    /// Run the numerical-stability catalogue (docs/numerics.md) through the
+    /// real plugins: one line per case, metric, value, target, pass or fail.
+    Stress(stress::StressArgs),
     /// List every plugin on the plugin path with its kind and parameters.
     Plugins {
         /// Extra folders to search first (repeatable).
@@ -82,6 +86,7 @@ fn main() {
     let res = match cli.command {
         Command::Render(a) => cmd_render(a, start),
         Command::Trace(a) => cmd_trace(a),
+        Command::Stress(a) => pool(a.threads).and_then(|(pool, _)| stress::run(a, &pool)),
         Command::Plugins { plugin_path, short } => cmd_plugins(&plugin_path, short),
     };
     if let Err(e) = res {
@@ -101,7 +106,8 @@ fn printable(msg: &str) -> String {
         .join("\n")
 }
 
-struct Pool<'a>(&'a rayon::ThreadPool);
+/// The host's rayon pool as the shell's [`Parallel`].
+pub(crate) struct Pool<'a>(pub(crate) &'a rayon::ThreadPool);
 
 impl Parallel for Pool<'_> {
     fn max_threads(&self) -> u32 {

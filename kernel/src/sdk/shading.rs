@@ -55,6 +55,47 @@ pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
     -wo + 2.0 * wo.dot(n) * n
 }
 
+/// `w`, turned if it must be so that it leaves on the side of the geometric
+/// normal `ng` that `side` points to (`side·ng > 0`; a zero `side` counts as
+/// the side `ng` faces, as in [`spawn_ray`]'s choice of offset).
+///
+/// Why: a direction computed about the shading normal, or rounded at grazing
+/// incidence, can cross the geometric surface, and the spawned ray is offset
+/// to the side its direction says: a reflected ray that dips below the
+/// surface by one rounding starts behind it and leaks (numerics.md S2, S5).
+/// Directions already on their side are returned unchanged; others are
+/// mirrored across the surface's plane and, if still within rounding of it,
+/// tipped by 1e-5 rad.
+#[inline]
+pub fn on_side(w: Vec3, ng: Vec3, side: f32) -> Vec3 {
+    let s = if side < 0.0 { -1.0 } else { 1.0 };
+    let c = w.dot(ng);
+    if c * s > 0.0 {
+        return w;
+    }
+    let m = w - ng * (2.0 * c);
+    if m.dot(ng) * s > 1e-6 {
+        return m;
+    }
+    (m + ng * (s * 1e-5)).normalize()
+}
+
+/// [`reflect`] about the shading normal `n`, on the side of the geometric
+/// normal that `wo` is on ([`on_side`]): what a mirror lobe returns.
+#[inline]
+pub fn reflect_at(g: &LocalGeom, wo: Vec3, n: Vec3) -> Vec3 {
+    let ng = g.ng.v();
+    on_side(reflect(wo, n), ng, wo.dot(ng))
+}
+
+/// [`refract`] about the shading normal `n`, on the other side of the
+/// geometric normal from `wo` ([`on_side`]).
+#[inline]
+pub fn refract_at(g: &LocalGeom, wo: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let ng = g.ng.v();
+    refract(wo, n, eta).map(|t| on_side(t, ng, -wo.dot(ng)))
+}
+
 /// Refract `wo` (pointing away from the surface, on the side `n` faces)
 /// with relative index `eta` = n_transmitted / n_incident; `None` on total
 /// internal reflection.
@@ -145,6 +186,50 @@ pub fn cosine_hemisphere(n: Vec3, u: [f32; 2]) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Reflections and refractions leave on their side of the geometric
+    /// normal even at grazing incidence and with shading normals tilted
+    /// away from it; correct directions are untouched.
+    #[test]
+    fn directions_keep_their_side() {
+        let mut s = crate::RngState::seeded(11);
+        let mut turned = 0;
+        for _ in 0..200_000 {
+            let ng = Vec3::new(
+                s.range_f32(-1.0, 1.0),
+                s.range_f32(-1.0, 1.0),
+                s.range_f32(-1.0, 1.0),
+            )
+            .normalize();
+            // Grazing: wo within 1e-6..1e-1 of the plane.
+            let t = ng.any_orthonormal_vector();
+            let lift = 10f32.powf(s.range_f32(-7.0, -1.0));
+            let wo = (t + ng * lift).normalize();
+            let ns = (ng + t * s.range_f32(-0.3, 0.3)).normalize();
+            let g = LocalGeom {
+                ng: ng.into(),
+                ns: ns.into(),
+                ..LocalGeom::EMPTY
+            };
+            let n = if ns.dot(wo) > 0.0 { ns } else { -ns };
+            let r = reflect_at(&g, wo, n);
+            // The side wo is on, a grazing zero counting as ng's (as spawn_ray does).
+            let side = if wo.dot(ng) < 0.0 { -1.0 } else { 1.0 };
+            assert!(
+                r.dot(ng) * side > 0.0,
+                "reflection crossed: wo {wo:?} ng {ng:?}"
+            );
+            assert!((r.length() - 1.0).abs() < 1e-5);
+            if reflect(wo, n) != r {
+                turned += 1;
+            }
+            if let Some(tr) = refract_at(&g, wo, n, 1.0 / 1.5) {
+                assert!(tr.dot(ng) * side < 0.0, "refraction stayed: wo {wo:?}");
+            }
+        }
+        // The plain formulas do cross at these angles: the guard is exercised.
+        assert!(turned > 1000, "only {turned} turned");
+    }
 
     #[test]
     fn fresnel_limits() {

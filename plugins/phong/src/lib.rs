@@ -2,7 +2,7 @@
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::{
-    cosine_lobe_sample, fresnel_dielectric, reflect, refract, same_side,
+    cosine_lobe_sample, fresnel_dielectric, reflect, reflect_at, refract_at, same_side,
 };
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -103,22 +103,22 @@ impl Phong {
     }
 
     /// The mirror lobe: direction and weight `kr + kt·F`.
-    fn mirror_lobe(&self, s: &Side, wo: Vec3) -> (Vec3, Color) {
+    fn mirror_lobe(&self, g: &LocalGeom, s: &Side, wo: Vec3) -> (Vec3, Color) {
         let mut w = self.kr;
         if !self.kt.is_black() {
             w = w.plus(self.kt.scale(fresnel_dielectric(wo.dot(s.n), s.eta)));
         }
-        (reflect(wo, s.n), w)
+        (reflect_at(g, wo, s.n), w)
     }
 
     /// The refraction lobe: direction and weight `kt·(1 − F)`; none on total
     /// internal reflection or without transmission.
-    fn refraction_lobe(&self, s: &Side, wo: Vec3) -> Option<(Vec3, Color)> {
+    fn refraction_lobe(&self, g: &LocalGeom, s: &Side, wo: Vec3) -> Option<(Vec3, Color)> {
         if self.kt.is_black() {
             return None;
         }
         let f = fresnel_dielectric(wo.dot(s.n), s.eta);
-        refract(wo, s.n, s.eta).map(|t| (t, self.kt.scale(1.0 - f)))
+        refract_at(g, wo, s.n, s.eta).map(|t| (t, self.kt.scale(1.0 - f)))
     }
 }
 
@@ -161,12 +161,12 @@ impl Shader for Phong {
         if lobes & lobe::SPECULAR != 0 && !(self.kr.is_black() && self.kt.is_black()) {
             let side = self.side(g, wo);
             if lobes & lobe::TRANSMISSION != 0 {
-                if let Some((t, w)) = self.refraction_lobe(&side, wo) {
+                if let Some((t, w)) = self.refraction_lobe(g, &side, wo) {
                     return delta(t, w, lobe::TRANSMISSION);
                 }
             }
             if lobes & lobe::REFLECTION != 0 {
-                let (r, w) = self.mirror_lobe(&side, wo);
+                let (r, w) = self.mirror_lobe(g, &side, wo);
                 return delta(r, w, lobe::REFLECTION);
             }
             return None;
