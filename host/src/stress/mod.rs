@@ -69,7 +69,10 @@ pub const CASES: &[Case] = &[
     // T1-T4 (triangles.rs)
     // A1-A5 (aggregates.rs)
     // Q1-Q3 (quadrics.rs)
-    // S1-S4 (spawn.rs)
+    spawn::S1,
+    spawn::S2,
+    spawn::S3,
+    spawn::S4,
     mirrors::S5,
     // X1-X3 (transforms.rs)
     // V1-V3 (hygiene.rs)

@@ -13,7 +13,7 @@ mod sphere;
 mod triangle;
 pub mod vec;
 
-pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_to, SHADOW_EPSILON};
+pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_between, spawn_ray_to, SHADOW_EPSILON};
 pub use real::{gamma, max_of, min_of, Real};
 pub use slab::{slab, RayBoxPrecomp, SlabHit};
 pub use sphere::{intersect_sphere, nearest_root, sphere_point_and_error, SphereHit};

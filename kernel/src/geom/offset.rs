@@ -57,6 +57,29 @@ pub fn spawn_ray_to(g: &LocalGeom, to: Vec3, parent: &Ray) -> Ray {
     }
 }
 
+/// A shadow ray between two surface points, each end offset past its own
+/// error bound towards the other (pbrt-v4 `SpawnRayTo` between
+/// interactions), stopping `SHADOW_EPSILON` short of the far end.
+///
+/// Why both ends: offsetting only the origin leaves the far end inside the
+/// target's error box, and the target surface then occludes its own point
+/// (numerics.md S4) — a light leak or a false shadow between two faces of
+/// the same enclosure.
+#[inline]
+pub fn spawn_ray_between(from: &LocalGeom, to: &LocalGeom, parent: &Ray) -> Ray {
+    let (pf, pt) = (from.p.v(), to.p.v());
+    let o = offset_ray_origin(pf, from.p_err.v(), from.ng.v(), pt - pf);
+    let end = offset_ray_origin(pt, to.p_err.v(), to.ng.v(), o - pt);
+    Ray {
+        origin: o.into(),
+        dir: (end - o).into(),
+        t_min: 0.0,
+        t_max: 1.0 - SHADOW_EPSILON,
+        time: parent.time,
+        generation: parent.generation + 1,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
