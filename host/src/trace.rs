@@ -160,6 +160,10 @@ fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
         }
     };
     let mut file = file;
+    let mut sets = sets;
+    // Ray files and the generated sets are in world coordinates: no
+    // camera-relative shift (docs/scene-format.md, `origin`).
+    sets.push("render.origin=\"world\"".to_string());
     file.apply_overrides(&sets)?;
     let desc = rtk_shell::Desc::from_file(&file)?;
     Ok(rtk_shell::build(&file, desc, &mut registry, parallel)?)

@@ -64,6 +64,12 @@ pub struct CreateEnv {
     pub image_width: u32,
     /// Image height in pixels.
     pub image_height: u32,
+    /// The world point the renderer computes about (camera-relative
+    /// rendering, docs/numerics.md X3): a plugin subtracts it, in f64, from
+    /// every world position it reads (parameters, files) before rounding to
+    /// f32. Zero for definitions placed by an instance transform, which
+    /// absorbs it instead.
+    pub origin: [f64; 3],
 }
 
 /// A task body for the host's `parallel_for`.

@@ -18,6 +18,8 @@ pub struct CreateArgs<'a> {
     pub image_width: u32,
     /// Image height in pixels.
     pub image_height: u32,
+    /// The world point the renderer computes about ([`CreateEnv::origin`]).
+    pub origin: [f64; 3],
 }
 
 impl CreateArgs<'_> {
@@ -30,6 +32,7 @@ impl CreateArgs<'_> {
             name_len: self.name.len(),
             image_width: self.image_width,
             image_height: self.image_height,
+            origin: self.origin,
         }
     }
 }

@@ -42,6 +42,7 @@ pub mod shading;
 pub(crate) mod shims;
 
 use crate::abi::*;
+use glam::Vec3;
 use serde::de::DeserializeOwned;
 use std::path::PathBuf;
 
@@ -93,9 +94,41 @@ pub struct Env<'a> {
     pub image_width: u32,
     /// Image height in pixels.
     pub image_height: u32,
+    /// The world point the renderer computes about: read world positions
+    /// with [`Env::position`] and [`Env::place`], which subtract it.
+    ///
+    /// Why: f32 spacing grows with magnitude, so a scene far from the
+    /// world's origin is computed coarsely (at 5e5 the spacing is 1/32). The
+    /// shell sets this to the camera's position by default; subtracting it in
+    /// f64 before the one rounding to f32 gives what the camera sees the
+    /// precision of a scene at the origin (docs/numerics.md X3).
+    pub origin: [f64; 3],
 }
 
 impl Env<'_> {
+    /// A world position parameter (`center`, `eye`, ...), finite and within
+    /// the kernel's range once moved to the renderer's origin. Directions
+    /// and object-space vectors use [`params::direction`] and
+    /// [`params::point`] instead: they do not move.
+    pub fn position(&self, key: &str, v: [f64; 3]) -> Result<Vec3, PluginError> {
+        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+            return Err(PluginError::key(key, format!("must be finite, got {x}")));
+        }
+        let p = self.place(v);
+        params::point(key, p.to_array())
+    }
+
+    /// A world position read from a file, moved to the renderer's origin:
+    /// `v − origin` in f64, rounded once to f32.
+    #[inline]
+    pub fn place(&self, v: [f64; 3]) -> Vec3 {
+        Vec3::new(
+            (v[0] - self.origin[0]) as f32,
+            (v[1] - self.origin[1]) as f32,
+            (v[2] - self.origin[2]) as f32,
+        )
+    }
+
     /// Resolve a file parameter against the scene's folder.
     pub fn resolve(&self, file: &str) -> PathBuf {
         let p = PathBuf::from(file);

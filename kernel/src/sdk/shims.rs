@@ -189,6 +189,7 @@ unsafe fn env_of<'a>(env: &'a CreateEnv) -> Env<'a> {
         name: std::str::from_utf8(name).unwrap_or(""),
         image_width: env.image_width,
         image_height: env.image_height,
+        origin: env.origin,
     }
 }
 

@@ -12,8 +12,8 @@ use std::f32::consts::TAU;
 #[derive(Deserialize)]
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
-    #[serde(default = "up")]
-    apex: [f32; 3],
+    #[serde(default = "apex")]
+    apex: [f64; 3],
     #[serde(default = "down")]
     axis: [f32; 3],
     #[serde(default)]
@@ -26,7 +26,7 @@ fn one() -> f32 {
     1.0
 }
 
-fn up() -> [f32; 3] {
+fn apex() -> [f64; 3] {
     [0.0, 1.0, 0.0]
 }
 
@@ -59,8 +59,8 @@ fn length(key: &str, r: f32) -> Result<f32, PluginError> {
 impl Plugin for ConeObject {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        let apex = params::point("apex", p.apex)?;
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        let apex = env.position("apex", p.apex)?;
         params::direction("axis", p.axis)?;
         let r = length("radius", p.radius)?;
         let axis = p.axis.map(f64::from);

@@ -13,7 +13,7 @@ use std::f32::consts::TAU;
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
     #[serde(default)]
-    base: [f32; 3],
+    base: [f64; 3],
     #[serde(default = "up")]
     axis: [f32; 3],
     #[serde(default)]
@@ -55,8 +55,8 @@ fn length(key: &str, r: f32) -> Result<f32, PluginError> {
 impl Plugin for CylinderObject {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        let base = params::point("base", p.base)?;
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        let base = env.position("base", p.base)?;
         params::direction("axis", p.axis)?;
         let r = length("radius", p.radius)?;
         let axis = p.axis.map(f64::from);

@@ -13,7 +13,7 @@ use std::f32::consts::TAU;
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
     #[serde(default)]
-    center: [f32; 3],
+    center: [f64; 3],
     #[serde(default = "up")]
     normal: [f32; 3],
     #[serde(default = "one")]
@@ -55,8 +55,8 @@ fn radius(key: &str, r: f32) -> Result<f32, PluginError> {
 impl Plugin for DiskObject {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        let c = params::point("center", p.center)?;
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        let c = env.position("center", p.center)?;
         params::direction("normal", p.normal)?;
         let r = radius("radius", p.radius)?;
         if !p.inner_radius.is_finite() || p.inner_radius < 0.0 || p.inner_radius >= r {

@@ -32,6 +32,9 @@ fn auto() -> Normals {
 
 struct Mesh {
     path: PathBuf,
+    /// The renderer's origin (`Env::origin`), subtracted from the file's
+    /// vertices when they are read.
+    origin: [f64; 3],
     normals_mode: Normals,
     p: Vec<[f32; 3]>,
     tris: Vec<[u32; 3]>,
@@ -135,6 +138,7 @@ impl Plugin for Mesh {
         }
         Ok(Mesh {
             path: env.resolve(&p.file),
+            origin: env.origin,
             normals_mode: p.normals,
             p: vec![],
             tris: vec![],
@@ -152,6 +156,13 @@ impl Object for Mesh {
         let bytes = load::read_file(env, &self.path)?;
         let m = load::load(&self.path, &bytes)?;
         self.p = m.positions;
+        if self.origin != [0.0; 3] {
+            // In f64, then rounded once: camera-relative rendering (X3).
+            let o = self.origin;
+            for v in &mut self.p {
+                *v = std::array::from_fn(|i| (v[i] as f64 - o[i]) as f32);
+            }
+        }
         self.tris = m.tris;
         self.tv = self
             .tris

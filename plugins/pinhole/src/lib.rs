@@ -1,6 +1,6 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::glam::Vec3;
+use rtk_kernel::glam::{DVec3, Vec3};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 
@@ -8,16 +8,16 @@ use rtk_kernel::*;
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
     #[serde(default = "default_eye")]
-    eye: [f32; 3],
+    eye: [f64; 3],
     #[serde(default)]
-    look_at: [f32; 3],
+    look_at: [f64; 3],
     #[serde(default = "default_up")]
     up: [f32; 3],
     #[serde(default = "default_fov")]
     fov_y: f32,
 }
 
-fn default_eye() -> [f32; 3] {
+fn default_eye() -> [f64; 3] {
     [0.0, 0.0, 5.0]
 }
 fn default_up() -> [f32; 3] {
@@ -38,8 +38,11 @@ impl Plugin for Pinhole {
     type Params = Params;
 
     fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
-        let eye = params::point("eye", p.eye)?;
-        let look_at = params::point("look_at", p.look_at)?;
+        let eye = env.position("eye", p.eye)?;
+        env.position("look_at", p.look_at)?;
+        // The view direction from the unrounded points: far from the
+        // origin their f32 roundings would tilt it.
+        let look = DVec3::from(p.look_at) - DVec3::from(p.eye);
         let up = params::point("up", p.up)?;
         if !(p.fov_y > 0.0 && p.fov_y < 180.0) {
             return Err(PluginError::key(
@@ -47,7 +50,7 @@ impl Plugin for Pinhole {
                 format!("must be between 0 and 180 degrees, got {}", p.fov_y),
             ));
         }
-        let forward = (look_at - eye).normalize_or_zero();
+        let forward = look.normalize_or_zero().as_vec3();
         if forward == Vec3::ZERO {
             return Err(PluginError::key("look_at", "must differ from eye"));
         }

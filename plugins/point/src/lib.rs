@@ -8,7 +8,7 @@ use rtk_kernel::*;
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
     #[serde(default)]
-    position: [f32; 3],
+    position: [f64; 3],
     #[serde(default = "one")]
     intensity: [f32; 3],
 }
@@ -25,9 +25,9 @@ struct Point {
 impl Plugin for Point {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
         Ok(Point {
-            pos: params::point("position", p.position)?,
+            pos: env.position("position", p.position)?,
             intensity: params::color("intensity", p.intensity)?,
         })
     }

@@ -11,9 +11,9 @@ use shape::{plane64, Polygon};
 #[derive(Deserialize)]
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
-    points: Vec<[f32; 3]>,
+    points: Vec<[f64; 3]>,
     #[serde(default)]
-    holes: Vec<Vec<[f32; 3]>>,
+    holes: Vec<Vec<[f64; 3]>>,
 }
 
 /// Points farther than this fraction of the polygon's size (the diagonal of
@@ -33,8 +33,9 @@ struct PolygonObject {
     v_len: f32,
 }
 
-/// Check one loop's points: at least 3, each finite.
-fn loop_points(key: &str, pts: &[[f32; 3]]) -> Result<Vec<[f64; 3]>, PluginError> {
+/// Check one loop's points: at least 3, each finite; moved to the
+/// renderer's origin in f64 (they are rounded to f32 later, once).
+fn loop_points(env: &Env, key: &str, pts: &[[f64; 3]]) -> Result<Vec<[f64; 3]>, PluginError> {
     if pts.len() < 3 {
         return Err(PluginError::key(
             key,
@@ -44,7 +45,8 @@ fn loop_points(key: &str, pts: &[[f32; 3]]) -> Result<Vec<[f64; 3]>, PluginError
     pts.iter()
         .enumerate()
         .map(|(i, p)| {
-            params::point(&format!("{key}[{i}]"), *p).map(|v| v.to_array().map(f64::from))
+            env.position(&format!("{key}[{i}]"), *p)?;
+            Ok(std::array::from_fn(|k| p[k] - env.origin[k]))
         })
         .collect()
 }
@@ -52,12 +54,12 @@ fn loop_points(key: &str, pts: &[[f32; 3]]) -> Result<Vec<[f64; 3]>, PluginError
 impl Plugin for PolygonObject {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        let mut loops = vec![loop_points("points", &p.points)?];
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        let mut loops = vec![loop_points(env, "points", &p.points)?];
         let mut keys = vec!["points".to_string()];
         for (i, h) in p.holes.iter().enumerate() {
             let key = format!("holes[{i}]");
-            loops.push(loop_points(&key, h)?);
+            loops.push(loop_points(env, &key, h)?);
             keys.push(key);
         }
         let (n, c) = plane64(&loops[0]).ok_or_else(|| {

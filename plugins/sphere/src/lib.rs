@@ -9,7 +9,7 @@ use rtk_kernel::*;
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
     #[serde(default)]
-    center: [f32; 3],
+    center: [f64; 3],
     #[serde(default = "one")]
     radius: f32,
 }
@@ -39,8 +39,8 @@ impl Sphere {
 impl Plugin for Sphere {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        let center = params::point("center", p.center)?;
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        let center = env.position("center", p.center)?;
         if !p.radius.is_finite() || p.radius <= 0.0 {
             return Err(PluginError::key(
                 "radius",

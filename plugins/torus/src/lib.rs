@@ -13,7 +13,7 @@ use std::f32::consts::TAU;
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
     #[serde(default)]
-    center: [f32; 3],
+    center: [f64; 3],
     #[serde(default = "up")]
     axis: [f32; 3],
     #[serde(default = "one")]
@@ -59,8 +59,8 @@ fn length(key: &str, r: f32) -> Result<f32, PluginError> {
 impl Plugin for TorusObject {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
-        let c = params::point("center", p.center)?;
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        let c = env.position("center", p.center)?;
         params::direction("axis", p.axis)?;
         let big = length("major_radius", p.major_radius)?;
         let small = length("minor_radius", p.minor_radius)?;

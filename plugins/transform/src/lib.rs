@@ -1,7 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 use rtk_kernel::geom::gamma;
-use rtk_kernel::glam::{Affine3A, DAffine3, Mat3, Vec3};
+use rtk_kernel::glam::{Affine3A, DAffine3, DVec3, Mat3, Vec3};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::xform::{self, Step};
 use rtk_kernel::*;
@@ -45,7 +45,11 @@ impl Plugin for Transform {
             (None, Some(s)) => xform::compose("steps", &s)?,
             _ => return Err(PluginError::msg("give exactly one of `matrix` and `steps`")),
         };
-        Self::from_transform(m, env)
+        // Placed in the renderer's space (docs/numerics.md X3): the shell
+        // creates this object's child unshifted, so the matrix absorbs the
+        // world origin, in f64.
+        let origin = DVec3::from(env.origin);
+        Self::from_transform(DAffine3::from_translation(-origin) * m, env)
     }
 }
 

@@ -109,7 +109,7 @@ fn build_world(
     } = create_others(&b, &desc)?;
     b.create_time += t1.elapsed();
     let root_inst = &desc.render.root;
-    let root = b.instance(root_inst, false)?;
+    let root = b.instance(root_inst, false, true)?;
     let root_bind = b.bindings(root_inst)?;
     let bounds = root.bounds(0.0, 1.0).map_err(|e| {
         SceneError::new(

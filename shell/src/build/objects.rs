@@ -2,6 +2,15 @@
 //! definition once, instance each child with its bindings, prepare (close).
 //! A definition instanced many times is created once; each transformed
 //! instance gets an instance-transform object of its own around it.
+//!
+//! Camera-relative rendering (docs/numerics.md X3): the world is computed
+//! about `[render] origin` (the camera's position by default). Definitions
+//! reached from the root through untransformed instances are created
+//! *shifted*: they subtract the origin from the world positions they read,
+//! in f64, before rounding to f32. The first instance transform on a path
+//! absorbs the shift instead (its matrix becomes `T(−origin)·M`, composed in
+//! f64), and everything below it is created unshifted. A definition reached
+//! both ways is created twice, once per kind.
 
 use super::prepare::PrepareHost;
 use crate::desc::defs::merge_attributes;
@@ -29,11 +38,13 @@ pub(crate) struct Builder<'a> {
     pub registry: &'a Registry,
     pub scene_dir: String,
     pub prepare_host: PrepareHost<'a>,
-    made: HashMap<String, Object>,
+    /// Objects made, by (definition, shifted).
+    made: HashMap<(String, bool), Object>,
     /// The aggregate class each primitive-set definition is wrapped in.
     pub accel: BTreeMap<String, String>,
-    /// The wrapped objects, by definition (one wrapper serves every instance).
-    wrapped: HashMap<String, Object>,
+    /// The wrapped objects, by (definition, shifted): one wrapper serves
+    /// every instance.
+    wrapped: HashMap<(String, bool), Object>,
     shader_ids: BTreeMap<ShaderKey, u32>,
     pub shaders: Vec<Shader>,
     pub objects_created: usize,
@@ -67,13 +78,24 @@ impl<'a> Builder<'a> {
         }
     }
 
-    /// The arguments of a `create` for the definition at `path`.
+    /// The arguments of a `create` for the definition at `path`, in the
+    /// renderer's space (cameras, lights, shaders, shifted objects).
     pub(crate) fn args<'b>(&'b self, path: &'b str) -> CreateArgs<'b> {
+        self.args_at(path, true)
+    }
+
+    /// [`Builder::args`] for an object created shifted or not.
+    fn args_at<'b>(&'b self, path: &'b str, shifted: bool) -> CreateArgs<'b> {
         CreateArgs {
             scene_dir: &self.scene_dir,
             name: path,
             image_width: self.desc.render.width,
             image_height: self.desc.render.height,
+            origin: if shifted {
+                self.desc.render.origin
+            } else {
+                [0.0; 3]
+            },
         }
     }
 
@@ -95,22 +117,33 @@ impl<'a> Builder<'a> {
     /// The object an instance puts in its parent: the definition's object
     /// (wrapped in its `accel` aggregate unless the parent flattens primitive
     /// sets and the instance has no transform), or an instance-transform
-    /// object of its own around it.
+    /// object of its own around it. `shifted`: the instance's parent space is
+    /// the renderer's (the module doc).
     pub(crate) fn instance(
         &mut self,
         inst: &Instance,
         parent_flattens: bool,
+        shifted: bool,
     ) -> Result<Object, SceneError> {
         let flattened = parent_flattens && inst.transform.is_none();
+        let child_shifted = shifted && inst.transform.is_none();
         let child = match self.accel.get(&inst.object) {
             Some(class) if !flattened => {
                 let class = class.clone();
-                self.wrapped(&inst.object, &class)?
+                self.wrapped(&inst.object, &class, child_shifted)?
             }
-            _ => self.object(&inst.object)?,
+            _ => self.object(&inst.object, child_shifted)?,
         };
         let Some(m) = &inst.transform else {
             return Ok(child);
+        };
+        let origin = glam::DVec3::from(self.desc.render.origin);
+        let shifted_m;
+        let m = if shifted && origin != glam::DVec3::ZERO {
+            shifted_m = glam::DAffine3::from_translation(-origin) * *m;
+            &shifted_m
+        } else {
+            m
         };
         let class = rtk_kernel::classes::INSTANCE_TRANSFORM;
         let fail = |e: CallError| {
@@ -124,8 +157,8 @@ impl<'a> Builder<'a> {
         };
         let t = Instant::now();
         let module = self.object_class(class);
-        let mut b =
-            ObjectBuilder::from_transform(module, m, &self.args(&inst.path)).map_err(fail)?;
+        let mut b = ObjectBuilder::from_transform(module, m, &self.args_at(&inst.path, false))
+            .map_err(fail)?;
         self.objects_created += 1;
         b.add_child(&child, InstanceData::NONE).map_err(fail)?;
         self.create_time += t.elapsed();
@@ -133,11 +166,12 @@ impl<'a> Builder<'a> {
     }
 
     /// The definition's object inside an aggregate of `class`, made once.
-    fn wrapped(&mut self, name: &str, class: &str) -> Result<Object, SceneError> {
-        if let Some(o) = self.wrapped.get(name) {
+    fn wrapped(&mut self, name: &str, class: &str, shifted: bool) -> Result<Object, SceneError> {
+        let key = (name.to_string(), shifted);
+        if let Some(o) = self.wrapped.get(&key) {
             return Ok(o.clone());
         }
-        let inner = self.object(name)?;
+        let inner = self.object(name, shifted)?;
         let od = &self.desc.objects[name];
         let path = format!("{}.accel", od.def.path());
         let origin = od
@@ -155,12 +189,13 @@ impl<'a> Builder<'a> {
         };
         let t = Instant::now();
         let module = self.object_class(class);
-        let mut b = ObjectBuilder::create(module, "{}", &self.args(&path)).map_err(fail)?;
+        let mut b =
+            ObjectBuilder::create(module, "{}", &self.args_at(&path, shifted)).map_err(fail)?;
         self.objects_created += 1;
         b.add_child(&inner, InstanceData::NONE).map_err(fail)?;
         self.create_time += t.elapsed();
         let o = self.prepared(b).map_err(fail)?;
-        self.wrapped.insert(name.to_string(), o.clone());
+        self.wrapped.insert(key, o.clone());
         Ok(o)
     }
 
@@ -174,9 +209,11 @@ impl<'a> Builder<'a> {
         r
     }
 
-    /// Create (once) and prepare an object definition and its children.
-    fn object(&mut self, name: &str) -> Result<Object, SceneError> {
-        if let Some(o) = self.made.get(name) {
+    /// Create (once per kind) and prepare an object definition and its
+    /// children.
+    fn object(&mut self, name: &str, shifted: bool) -> Result<Object, SceneError> {
+        let key = (name.to_string(), shifted);
+        if let Some(o) = self.made.get(&key) {
             return Ok(o.clone());
         }
         let desc = self.desc;
@@ -184,13 +221,17 @@ impl<'a> Builder<'a> {
         let def = &od.def;
         let t = Instant::now();
         let module = self.object_class(&def.class);
-        let created = ObjectBuilder::create(module, &def.params, &self.args(&def.path()));
+        let path = def.path();
+        let created = ObjectBuilder::create(module, &def.params, &self.args_at(&path, shifted));
         self.create_time += t.elapsed();
         let mut b = created.map_err(|e| call_error(def, None, "its parameters", e))?;
         self.objects_created += 1;
         let flattens = module.flattens_primitives();
+        // A transform object places its child by its matrix, which absorbs
+        // the shift (its plugin subtracts the origin it is given).
+        let children_shifted = shifted && def.class != rtk_kernel::classes::INSTANCE_TRANSFORM;
         for inst in &od.children {
-            let child = self.instance(inst, flattens)?;
+            let child = self.instance(inst, flattens, children_shifted)?;
             let data = self.bindings(inst)?;
             let t = Instant::now();
             let added = b.add_child(&child, data);
@@ -200,7 +241,7 @@ impl<'a> Builder<'a> {
         let o = self
             .prepared(b)
             .map_err(|e| call_error(def, None, "to build", e))?;
-        self.made.insert(name.to_string(), o.clone());
+        self.made.insert(key, o.clone());
         Ok(o)
     }
 

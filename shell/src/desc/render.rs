@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 /// Largest image, in pixels (the f64 film takes 24 bytes a pixel).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
-const KEYS: [&str; 9] = [
+const KEYS: [&str; 10] = [
     "width",
     "height",
     "spp",
@@ -21,6 +21,7 @@ const KEYS: [&str; 9] = [
     "integrator",
     "background",
     "output",
+    "origin",
 ];
 const OBJ: &str = "render";
 
@@ -47,6 +48,10 @@ pub struct Render {
     pub background: [f32; 3],
     /// Default output file.
     pub output: Option<String>,
+    /// The world point the renderer computes about (`origin`): by default
+    /// the camera's `eye`, so that what the camera sees has the precision
+    /// of a scene at the origin (docs/numerics.md X3).
+    pub origin: [f64; 3],
 }
 
 impl Render {
@@ -77,6 +82,7 @@ impl Render {
             ));
         }
         let camera = camera(r, cameras)?;
+        let origin = origin(r, cameras.get(&camera.name))?;
         let Some(rn) = r.get("root") else {
             return Err(SceneError::invalid(
                 &r.origin,
@@ -99,7 +105,51 @@ impl Render {
                 .get("output")
                 .map(|n| string(n, OBJ, "output"))
                 .transpose()?,
+            origin,
         })
+    }
+}
+
+/// `origin`: `"camera"` (the default: the camera's `eye` parameter, or the
+/// world's origin for a camera without one), `"world"`, or a point.
+fn origin(r: &Node, camera: Option<&Def>) -> Result<[f64; 3], SceneError> {
+    let eye = || {
+        camera
+            .and_then(|c| serde_json::from_str::<serde_json::Value>(&c.params).ok())
+            .and_then(|p| serde_json::from_value::<[f64; 3]>(p.get("eye")?.clone()).ok())
+            .filter(|e| e.iter().all(|x| x.is_finite()))
+            .unwrap_or([0.0; 3])
+    };
+    let Some(n) = r.get("origin") else {
+        return Ok(eye());
+    };
+    let bad = || {
+        SceneError::invalid(
+            &n.origin,
+            OBJ,
+            "origin",
+            "expected \"camera\", \"world\" or a point [x, y, z]",
+        )
+    };
+    match &n.value {
+        Val::Str(s) if s == "camera" => Ok(eye()),
+        Val::Str(s) if s == "world" => Ok([0.0; 3]),
+        Val::Arr(a) if a.len() == 3 => {
+            let mut p = [0.0; 3];
+            for (i, c) in a.iter().enumerate() {
+                p[i] = number(c, OBJ, &format!("origin[{i}]"))?;
+                if p[i].abs() > 1e12 {
+                    return Err(SceneError::invalid(
+                        &c.origin,
+                        OBJ,
+                        format!("origin[{i}]"),
+                        "must be within 1e12 of the world's origin",
+                    ));
+                }
+            }
+            Ok(p)
+        }
+        _ => Err(bad()),
     }
 }
 
