@@ -87,7 +87,7 @@ impl Line {
             format!("{:.3e}", self.value)
         };
         format!(
-            "{:<4} {:<38} {:<28} {:>12} {:>10}  {}",
+            "{:<4} {:<44} {:<28} {:>12} {:>10}  {}",
             id,
             self.setup,
             self.metric,

@@ -156,26 +156,38 @@ fn parallel_mirrors(b: &mut Bench) -> Result<Vec<Line>> {
 }
 
 /// Setup C through `rtk render`'s own loop: a camera inside a closed mirror
-/// box (12 triangles) and inside a closed mirror sphere mesh, Whitted at depth
-/// 1000, a white background and black mirrors: every pixel that is not black
-/// is a path that escaped.
+/// box (12 triangles, axis-aligned and rotated) and inside a closed mirror
+/// sphere mesh (face normals, and smooth vertex normals, whose mirror
+/// directions can dip below the facets), Whitted at depth 1000, a white
+/// background and black mirrors: every pixel that is not black is a path
+/// that escaped. The scenes are rendered about the world's origin
+/// (`origin = "world"`): camera-relative rendering would bring every
+/// enclosure back to the origin and hide what this measures.
 fn rendered(b: &mut Bench) -> Result<Vec<Line>> {
     let size = b.n(48, 256);
     let mut lines = Vec::new();
+    let mut rng = RngState::seeded(0x5c);
     for &dist in &[0.0, 1e3, 1e5] {
         let c = DVec3::splat(dist);
-        for (shape, mesh) in [
-            ("box", box_mesh(c, DVec3::ONE)),
-            ("sphere mesh", uv_sphere(c, 24, 48, |_| 1.0)),
+        let turn = rotation(&mut rng);
+        let mut tilted = box_mesh(DVec3::ZERO, DVec3::ONE);
+        for v in &mut tilted.verts {
+            *v = (c + turn * DVec3::from(v.map(f64::from))).as_vec3().to_array();
+        }
+        for (shape, mesh, normals) in [
+            ("box", box_mesh(c, DVec3::ONE), "face"),
+            ("rotated box", tilted, "face"),
+            ("sphere mesh", uv_sphere(c, 24, 48, |_| 1.0), "face"),
+            ("smooth sphere mesh", uv_sphere(c, 24, 48, |_| 1.0), "vertex"),
         ] {
             b.write_obj("enclosure.obj", &mesh)?;
             let world = b.scene(&format!(
-                "[render]\nwidth = {size}\nheight = {size}\nroot = \"world\"\n\
+                "[render]\nwidth = {size}\nheight = {size}\nroot = \"world\"\norigin = \"world\"\n\
                  background = [1.0, 1.0, 1.0]\n\
                  integrator = {{ class = \"whitted\", max_depth = 1000 }}\n\
                  [cameras.c]\nclass = \"pinhole\"\neye = {}\nlook_at = {}\nfov_y = 90.0\n\
                  [shaders.mirror]\nclass = \"phong\"\ndiffuse = [0.0, 0.0, 0.0]\nmirror = [1.0, 1.0, 1.0]\n\
-                 [objects.m]\nclass = \"mesh\"\nfile = \"enclosure.obj\"\n\
+                 [objects.m]\nclass = \"mesh\"\nfile = \"enclosure.obj\"\nnormals = \"{normals}\"\n\
                  [objects.world]\nclass = \"list\"\nchildren = [{{ object = \"m\", shader = \"mirror\" }}]\n",
                 vec3((c + DVec3::new(0.1, 0.2, 0.3)).to_array()),
                 vec3((c + DVec3::new(0.5, -0.2, -0.7)).to_array()),

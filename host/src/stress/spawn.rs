@@ -9,7 +9,7 @@ use anyhow::Result;
 use rtk_kernel::abi::{Hit, LocalGeom, Ray};
 use rtk_kernel::geom::{spawn_ray, spawn_ray_between};
 use rtk_kernel::glam::DVec3;
-use rtk_kernel::sdk::shading::on_side;
+use rtk_kernel::sdk::shading::{on_side, reflect_at};
 use rtk_kernel::RngState;
 
 /// docs/numerics.md S1.
@@ -230,7 +230,7 @@ fn s2(b: &mut Bench) -> Result<Vec<Line>> {
             }
         }
     }
-    Ok(bins
+    let mut lines: Vec<Line> = bins
         .iter()
         .zip(rehits)
         .map(|(cos, n)| {
@@ -240,7 +240,49 @@ fn s2(b: &mut Bench) -> Result<Vec<Line>> {
                 n,
             )
         })
-        .collect())
+        .collect();
+    lines.push(smooth_mirror(b, &mut rng)?);
+    Ok(lines)
+}
+
+/// Grazing mirror reflections off a coarse convex mesh with smooth vertex
+/// normals: the mirror direction about the shading normal can point below
+/// the facet it leaves (rule 13 turns it back). A reflection leaving a
+/// convex object outwards never meets it again, so every hit is a ray that
+/// passed through the surface.
+fn smooth_mirror(b: &mut Bench, rng: &mut RngState) -> Result<Line> {
+    let rays = b.n(4000, 100_000);
+    b.write_obj("smooth.obj", &uv_sphere(DVec3::ZERO, 8, 16, |_| 1.0))?;
+    let world = b.scene(&format!(
+        "{}[objects.m]\nclass = \"mesh\"\nfile = \"smooth.obj\"\nnormals = \"vertex\"\n",
+        header("m")
+    ))?;
+    let mut probe = Probe::new(&world);
+    let mut through = 0u64;
+    for _ in 0..rays {
+        // Aim at the silhouette band seen from a random direction.
+        let view = unit_vector(rng);
+        let side = unit_vector(rng).reject_from(view).normalize();
+        let target = side * (0.9 + 0.1 * rng.next_f64());
+        let o = target - view * 5.0;
+        let r = ray(o, view);
+        let Some(h) = probe.nearest(&r)? else {
+            continue;
+        };
+        let g = probe.geom(&r, &h)?;
+        let wo = -r.dir.v().normalize();
+        let ns = g.ns.v();
+        let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
+        let s = spawn_ray(&g, reflect_at(&g, wo, n), &r);
+        if probe.nearest(&s)?.is_some() {
+            through += 1;
+        }
+    }
+    Ok(Line::count(
+        format!("smooth-normal mirror, grazing, {rays} rays"),
+        "reflections through surface",
+        through,
+    ))
 }
 
 /// Concentric spheres r and r + g, and parallel planes g apart: a ray
@@ -367,7 +409,14 @@ fn s4(b: &mut Bench) -> Result<Vec<Line>> {
     let mut lines = Vec::new();
     for mag_c in [0.0, 1e4] {
         let c = unit_vector(&mut rng) * mag_c;
-        b.write_obj("s4.obj", &box_mesh(c, DVec3::splat(0.5)))?;
+        // Rotated: the faces of an axis-aligned box have exact coordinates,
+        // which would hide the far end's error.
+        let turn = rotation(&mut rng);
+        let mut m = box_mesh(DVec3::ZERO, DVec3::splat(0.5));
+        for v in &mut m.verts {
+            *v = (c + turn * DVec3::from(v.map(f64::from))).as_vec3().to_array();
+        }
+        b.write_obj("s4.obj", &m)?;
         let world = b.scene(&format!(
             "{}[objects.m]\nclass = \"mesh\"\nfile = \"s4.obj\"\n",
             header("m")
@@ -376,7 +425,7 @@ fn s4(b: &mut Bench) -> Result<Vec<Line>> {
         let mut point = |rng: &mut RngState, near_edge: bool| -> Result<Option<(Ray, LocalGeom)>> {
             let mut d = unit_vector(rng);
             if near_edge {
-                // Aim within 1e-3 of an edge: two coordinates near ±0.5.
+                // Aim within 1e-3 of an edge: two box coordinates near ±0.5.
                 let i = (rng.next_f64() * 3.0) as usize % 3;
                 let mut t = DVec3::ZERO;
                 for k in 0..3 {
@@ -386,7 +435,7 @@ fn s4(b: &mut Bench) -> Result<Vec<Line>> {
                         (0.5 - 1e-3 * rng.next_f64()).copysign(d[k])
                     };
                 }
-                d = t.normalize();
+                d = turn * t.normalize();
             }
             let r = ray(c, d);
             Ok(match probe.nearest(&r)? {
