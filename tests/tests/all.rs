@@ -11,5 +11,6 @@ mod quadrics;
 mod refusals;
 mod shading;
 mod silhouette;
+mod stress;
 mod trace;
 mod whitted;

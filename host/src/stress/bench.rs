@@ -1,5 +1,3 @@
-// TEMPORARY while the catalogue fills in: helpers used by cases still being written.
-#![allow(dead_code)]
 //! What every stress case needs: sizes, result lines, scenes built from TOML
 //! text through the shell, meshes written exactly, a probe that traces
 //! through the world's root, and renders through the real render loop.

@@ -172,13 +172,19 @@ fn rendered(b: &mut Bench) -> Result<Vec<Line>> {
         let turn = rotation(&mut rng);
         let mut tilted = box_mesh(DVec3::ZERO, DVec3::ONE);
         for v in &mut tilted.verts {
-            *v = (c + turn * DVec3::from(v.map(f64::from))).as_vec3().to_array();
+            *v = (c + turn * DVec3::from(v.map(f64::from)))
+                .as_vec3()
+                .to_array();
         }
         for (shape, mesh, normals) in [
             ("box", box_mesh(c, DVec3::ONE), "face"),
             ("rotated box", tilted, "face"),
             ("sphere mesh", uv_sphere(c, 24, 48, |_| 1.0), "face"),
-            ("smooth sphere mesh", uv_sphere(c, 24, 48, |_| 1.0), "vertex"),
+            (
+                "smooth sphere mesh",
+                uv_sphere(c, 24, 48, |_| 1.0),
+                "vertex",
+            ),
         ] {
             b.write_obj("enclosure.obj", &mesh)?;
             let world = b.scene(&format!(

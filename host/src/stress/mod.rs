@@ -66,16 +66,29 @@ pub struct Case {
 /// integrators do not exist yet (patches, motion, CSG, the path tracer's
 /// furnaces) are absent, not stubbed: docs/numerics.md lists them.
 pub const CASES: &[Case] = &[
-    // T1-T4 (triangles.rs)
-    // A1-A5 (aggregates.rs)
-    // Q1-Q3 (quadrics.rs)
+    triangles::T1,
+    triangles::T2,
+    triangles::T3,
+    triangles::T4,
+    aggregates::A1,
+    aggregates::A2,
+    aggregates::A3,
+    aggregates::A4,
+    aggregates::A5,
+    quadrics::Q1,
+    quadrics::Q2,
+    quadrics::Q3,
     spawn::S1,
     spawn::S2,
     spawn::S3,
     spawn::S4,
     mirrors::S5,
-    // X1-X3 (transforms.rs)
-    // V1-V3 (hygiene.rs)
+    transforms::X1,
+    transforms::X2,
+    transforms::X3,
+    hygiene::V1,
+    hygiene::V2,
+    hygiene::V3,
 ];
 
 /// Run `rtk stress`.
@@ -104,7 +117,7 @@ pub fn run(a: StressArgs, pool: &rayon::ThreadPool) -> Result<()> {
     let mut failed = 0;
     if !a.json {
         println!(
-            "{:<4} {:<38} {:<28} {:>12} {:>10}  result",
+            "{:<4} {:<44} {:<28} {:>12} {:>10}  result",
             "case", "setup", "metric", "value", "target"
         );
     }

@@ -183,7 +183,40 @@ fn s1(b: &mut Bench) -> Result<Vec<Line>> {
             rehits,
         ));
     }
+    lines.push(denormal_camera(b)?);
     Ok(lines)
+}
+
+/// The converse of a self-hit: a camera one denormal (1.4e-45) above a
+/// floor, looking down at it, must see the floor in every pixel, where the
+/// t bounds of f32 and f64 alike cannot tell t ≈ 1e-45 from 0 (the exact
+/// orientation test decides, docs/numerics.md rule 4). Rendered through
+/// the render loop about the world's origin, so the eye stays a denormal.
+fn denormal_camera(b: &mut Bench) -> Result<Line> {
+    let size = b.n(64, 256);
+    let floor = Mesh {
+        verts: vec![
+            [-10.0, 0.0, -10.0],
+            [10.0, 0.0, -10.0],
+            [10.0, 0.0, 10.0],
+            [-10.0, 0.0, 10.0],
+        ],
+        tris: vec![[0, 2, 1], [0, 3, 2]],
+    };
+    b.write_obj("floor.obj", &floor)?;
+    let world = b.scene(&format!(
+        "[render]\nwidth = {size}\nheight = {size}\nroot = \"f\"\norigin = \"world\"\n\
+         background = [1.0, 1.0, 1.0]\nintegrator = \"normals\"\n\
+         [cameras.c]\nclass = \"pinhole\"\neye = [0.3, 1e-45, 0.2]\nlook_at = [0.5, -1.0, 0.4]\nfov_y = 60.0\n\
+         [objects.f]\nclass = \"mesh\"\nfile = \"floor.obj\"\n"
+    ))?;
+    let film = b.render(&world)?;
+    let missed = film.pixels.iter().filter(|p| **p == [1.0; 3]).count();
+    Ok(Line::count(
+        format!("camera 1e-45 above a floor, {size}^2"),
+        "pixels missing the floor",
+        missed as u64,
+    ))
 }
 
 /// S1's triangles with directions at a fixed angle to the surface: a
@@ -414,7 +447,9 @@ fn s4(b: &mut Bench) -> Result<Vec<Line>> {
         let turn = rotation(&mut rng);
         let mut m = box_mesh(DVec3::ZERO, DVec3::splat(0.5));
         for v in &mut m.verts {
-            *v = (c + turn * DVec3::from(v.map(f64::from))).as_vec3().to_array();
+            *v = (c + turn * DVec3::from(v.map(f64::from)))
+                .as_vec3()
+                .to_array();
         }
         b.write_obj("s4.obj", &m)?;
         let world = b.scene(&format!(

@@ -129,8 +129,10 @@ impl Tri4 {
     /// The lanes the exact test may accept below `t_max`: it rejects a lane
     /// only where the scalar watertight test (same operations, same order,
     /// per lane) decides a miss in f32 — mixed edge-function signs, or `t`
-    /// out of range — and keeps every lane with an exactly zero edge
-    /// function (the scalar test decides those in f64).
+    /// beyond `t_max` — and keeps every lane with an exactly zero edge
+    /// function (the scalar test decides those in f64). A `t` behind the
+    /// origin is left to the scalar test too: within its error bound of 0
+    /// the exact orientation decides (`Core::Near`).
     #[inline(always)]
     fn screen(&self, r: &RayShear<f32>, t_max: f32) -> u32 {
         #[cfg(target_arch = "x86_64")]
@@ -182,14 +184,8 @@ impl Tri4 {
                 _mm_mul_ps(e2, pz[2]),
             );
             let lim = _mm_mul_ps(_mm_set1_ps(t_max), det);
-            let neg_ok = _mm_and_ps(
-                _mm_cmplt_ps(det, zero),
-                _mm_and_ps(_mm_cmplt_ps(ts, zero), _mm_cmpge_ps(ts, lim)),
-            );
-            let pos_ok = _mm_and_ps(
-                _mm_cmpgt_ps(det, zero),
-                _mm_and_ps(_mm_cmpgt_ps(ts, zero), _mm_cmple_ps(ts, lim)),
-            );
+            let neg_ok = _mm_and_ps(_mm_cmplt_ps(det, zero), _mm_cmpge_ps(ts, lim));
+            let pos_ok = _mm_and_ps(_mm_cmpgt_ps(det, zero), _mm_cmple_ps(ts, lim));
             let in_range = _mm_andnot_ps(mixed, _mm_or_ps(neg_ok, pos_ok));
             _mm_movemask_ps(_mm_or_ps(has_zero, in_range)) as u32
         }

@@ -16,7 +16,10 @@ pub mod vec;
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_between, spawn_ray_to, SHADOW_EPSILON};
 pub use real::{gamma, max_of, min_of, Real};
 pub use slab::{slab, RayBoxPrecomp, SlabHit};
-pub use sphere::{intersect_sphere, nearest_root, sphere_point_and_error, SphereHit};
+pub use sphere::{
+    intersect_sphere, intersect_sphere_in_f64, nearest_root, sphere_point_and_error,
+    sphere_point_in_f64, SphereHit,
+};
 pub use triangle::{
     intersect_triangle, intersect_triangle_f64, intersect_triangle_sheared, is_degenerate,
     triangle_point_and_error, triangle_point_inset, RayShear, TriHit,

@@ -30,6 +30,8 @@ pub trait Real:
     fn is_finite(self) -> bool;
     /// Convert from f64 (rounding).
     fn from_f64(v: f64) -> Self;
+    /// Convert to f64 (exact).
+    fn to_f64(self) -> f64;
     /// Sign: -1 for negative, +1 otherwise.
     fn signum1(self) -> Self;
 }
@@ -56,6 +58,10 @@ macro_rules! impl_real {
             #[inline]
             fn from_f64(v: f64) -> Self {
                 v as $t
+            }
+            #[inline]
+            fn to_f64(self) -> f64 {
+                self as f64
             }
             #[inline]
             fn signum1(self) -> Self {

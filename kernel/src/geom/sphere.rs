@@ -98,6 +98,70 @@ pub fn sphere_point_and_error<R: Real>(
     (p, err)
 }
 
+/// An f64 bound rounded up to f32.
+#[inline]
+fn up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+/// [`intersect_sphere`] on f32 inputs, evaluated in f64 and rounded once:
+/// what the `sphere` plugin uses.
+///
+/// Why: in f32 even the RTG-7 form loses the far sphere: `f − s·d` rounds at
+/// the scale of the distance, and `|f|² − r²` cancels for a huge sphere seen
+/// from near its surface (a 1e6 ground 3 units below the camera: t off by
+/// 0.5 %), so silhouettes of spheres 1e5–1e6 radii away, and tiny spheres,
+/// classify differently from the f64 reference (numerics.md Q1–Q3, X2).
+/// The inputs convert exactly, so this is the f64 reference itself, and a
+/// scalar f64 evaluation costs about what the f32 one does (BENCHMARKS.md).
+/// The band of [`nearest_root`] becomes the f64 one, a few f64 ulps, so an
+/// origin just above a huge sphere still sees it.
+#[inline]
+pub fn intersect_sphere_in_f64(
+    c: [f32; 3],
+    r: f32,
+    o: [f32; 3],
+    d: [f32; 3],
+) -> Option<SphereHit<f32>> {
+    let w = |a: [f32; 3]| a.map(f64::from);
+    let h = intersect_sphere::<f64>(w(c), r as f64, w(o), w(d))?;
+    let (t0, t1) = (h.t0 as f32, h.t1 as f32);
+    (t0.is_finite() && t1.is_finite()).then_some(SphereHit {
+        t0,
+        t1,
+        t_err: up(h.t_err),
+    })
+}
+
+/// [`sphere_point_and_error`] evaluated in f64 and rounded once: the point
+/// is on the sphere to f64 precision, so its bound is its own rounding to
+/// f32 (about an ulp of |p|), not an ulp of the centre's distance — a point
+/// on a 1e6 sphere near the world's origin is as exact as the origin allows.
+#[inline]
+pub fn sphere_point_in_f64(
+    c: [f32; 3],
+    r: f32,
+    o: [f32; 3],
+    d: [f32; 3],
+    t: f32,
+) -> ([f32; 3], [f32; 3]) {
+    let w = |a: [f32; 3]| a.map(f64::from);
+    let (p, e) = sphere_point_and_error::<f64>(w(c), r as f64, w(o), w(d), t as f64);
+    let pf = p.map(|x| x as f32);
+    let delta = std::array::from_fn::<f64, 3, _>(|i| (pf[i] as f64 - p[i]).abs());
+    // Rounding moves the point along the surface too, and a sphere curves
+    // away from its tangent plane by |δ|²/2r: on a tiny sphere that can
+    // exceed the normal part of δ (numerics.md Q3's ant).
+    let curve = (delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2]) / (r as f64);
+    let err = std::array::from_fn(|i| up(e[i] + delta[i] + curve));
+    (pf, err)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -45,9 +45,12 @@ fn mx<R: Real>(a: R, b: R) -> R {
 
 /// Result of the core test: a hit, no hit, or "f32 cannot decide".
 enum Core<R> {
+    /// A hit and the bound on its t's error.
     Hit(TriHit<R>, R),
     Miss,
-    Undecided,
+    /// Inside the triangle, at a t that came out ≤ 0 but within its error
+    /// bound of 0: the plane may lie just ahead of the origin.
+    Near(TriHit<R>),
 }
 
 /// What the test computes from the ray alone: the axis permutation that
@@ -117,12 +120,12 @@ fn core<R: Real>(
     d: [R; 3],
     p: [[R; 3]; 3],
     t_max: R,
-    exact_zero_is_undecided: bool,
+    exact_zeros_in_f64: bool,
 ) -> Core<R> {
     if is_degenerate(&p) {
         return Core::Miss;
     }
-    core_sheared(&RayShear::new(o, d), p, t_max, exact_zero_is_undecided)
+    core_sheared(&RayShear::new(o, d), p, t_max, exact_zeros_in_f64)
 }
 
 /// The per-triangle part of the test, for a non-degenerate triangle.
@@ -131,7 +134,7 @@ fn core_sheared<R: Real>(
     r: &RayShear<R>,
     p: [[R; 3]; 3],
     t_max: R,
-    exact_zero_is_undecided: bool,
+    exact_zeros_in_f64: bool,
 ) -> Core<R> {
     let o = r.o;
     let [kx, ky, kz] = r.k;
@@ -150,11 +153,19 @@ fn core_sheared<R: Real>(
       // `mul_add` is a library call (~2x slower here, BENCHMARKS.md). They stay
       // watertight: a shared edge's function is computed from the same operands
       // in both triangles and comes out exactly negated; an exact zero goes to f64.
-    let e0 = t[1][0] * t[2][1] - t[1][1] * t[2][0];
-    let e1 = t[2][0] * t[0][1] - t[2][1] * t[0][0];
-    let e2 = t[0][0] * t[1][1] - t[0][1] * t[1][0];
-    if exact_zero_is_undecided && (e0 == R::ZERO || e1 == R::ZERO || e2 == R::ZERO) {
-        return Core::Undecided;
+    let mut e0 = t[1][0] * t[2][1] - t[1][1] * t[2][0];
+    let mut e1 = t[2][0] * t[0][1] - t[2][1] * t[0][0];
+    let mut e2 = t[0][0] * t[1][1] - t[0][1] * t[1][0];
+    if exact_zeros_in_f64 && (e0 == R::ZERO || e1 == R::ZERO || e2 == R::ZERO) {
+        // pbrt-v4: redo the edge functions in f64 from the same sheared
+        // f32 coordinates. Products of f32s are exact in f64, so each sign
+        // is exact, and a shared edge still comes out exactly negated in
+        // the neighbour: the decision stays watertight (T2-T4).
+        let w =
+            |a: R, b: R, c: R, d: R| R::from_f64(a.to_f64() * b.to_f64() - c.to_f64() * d.to_f64());
+        e0 = w(t[1][0], t[2][1], t[1][1], t[2][0]);
+        e1 = w(t[2][0], t[0][1], t[2][1], t[0][0]);
+        e2 = w(t[0][0], t[1][1], t[0][1], t[1][0]);
     }
     if (e0 < R::ZERO || e1 < R::ZERO || e2 < R::ZERO)
         && (e0 > R::ZERO || e1 > R::ZERO || e2 > R::ZERO)
@@ -169,31 +180,44 @@ fn core_sheared<R: Real>(
         v[2] = v[2] * sz;
     }
     let ts = e0 * t[0][2] + e1 * t[1][2] + e2 * t[2][2];
-    // Compare in scaled form (no division yet); NaN-false throughout.
-    if det < R::ZERO && !(ts < R::ZERO && ts >= t_max * det) {
-        return Core::Miss;
-    }
-    if det > R::ZERO && !(ts > R::ZERO && ts <= t_max * det) {
-        return Core::Miss;
-    }
+    // pbrt-v4's bound on the error of t, in the scaled form (times |det|).
+    let ts_err = || {
+        let max_zt = mx(mx(t[0][2].abs(), t[1][2].abs()), t[2][2].abs());
+        let max_xt = mx(mx(t[0][0].abs(), t[1][0].abs()), t[2][0].abs());
+        let max_yt = mx(mx(t[0][1].abs(), t[1][1].abs()), t[2][1].abs());
+        let dz = gamma::<R>(3) * max_zt;
+        let dx = gamma::<R>(5) * (max_xt + max_zt);
+        let dy = gamma::<R>(5) * (max_yt + max_zt);
+        let two = R::ONE + R::ONE;
+        let three = two + R::ONE;
+        let de = two * (gamma::<R>(2) * max_xt * max_yt + dy * max_xt + dx * max_yt);
+        let max_e = mx(mx(e0.abs(), e1.abs()), e2.abs());
+        three * (gamma::<R>(3) * max_e * max_zt + de * max_zt + dz * max_e)
+    };
     let inv = R::ONE / det;
-    let hit = TriHit {
+    let hit = || TriHit {
         t: ts * inv,
         b: [e0 * inv, e1 * inv, e2 * inv],
     };
-    // pbrt-v4's bound on the error of t.
-    let max_zt = mx(mx(t[0][2].abs(), t[1][2].abs()), t[2][2].abs());
-    let max_xt = mx(mx(t[0][0].abs(), t[1][0].abs()), t[2][0].abs());
-    let max_yt = mx(mx(t[0][1].abs(), t[1][1].abs()), t[2][1].abs());
-    let dz = gamma::<R>(3) * max_zt;
-    let dx = gamma::<R>(5) * (max_xt + max_zt);
-    let dy = gamma::<R>(5) * (max_yt + max_zt);
-    let two = R::ONE + R::ONE;
-    let three = two + R::ONE;
-    let de = two * (gamma::<R>(2) * max_xt * max_yt + dy * max_xt + dx * max_yt);
-    let max_e = mx(mx(e0.abs(), e1.abs()), e2.abs());
-    let dt = three * (gamma::<R>(3) * max_e * max_zt + de * max_zt + dz * max_e) * inv.abs();
-    Core::Hit(hit, dt)
+    // Compare in scaled form (no division yet); NaN-false throughout. A t
+    // on the wrong side of 0 by less than its error is not a miss yet (the
+    // rare path: the ray's line crosses the triangle behind the origin).
+    let ahead = if det < R::ZERO {
+        ts < R::ZERO
+    } else {
+        ts > R::ZERO
+    };
+    if !ahead {
+        return if ts.abs() <= ts_err() {
+            Core::Near(hit())
+        } else {
+            Core::Miss
+        };
+    }
+    if det < R::ZERO && !(ts >= t_max * det) || det > R::ZERO && !(ts <= t_max * det) {
+        return Core::Miss;
+    }
+    Core::Hit(hit(), ts_err() * inv.abs())
 }
 
 /// The f64 oracle: the same test in f64 on the (exactly converted) inputs.
@@ -208,6 +232,104 @@ pub fn intersect_triangle_f64(
         Core::Hit(h, _) if h.t > t_min && h.t < t_max && h.t.is_finite() => Some(h),
         _ => None,
     }
+}
+
+/// The `t` of a hit whose inside/outside f32 has decided but whose `t` f32
+/// cannot tell from 0 (rule 4): the plane's `t` in f64, and where even that
+/// is within its bound of 0, the exact orientation (`hit_just_ahead`). Only
+/// `t` is rechecked: the classification stays the f32 one, which the
+/// triangle's neighbours share, so the mesh stays watertight.
+#[cold]
+fn resolve_t(o: [f32; 3], d: [f32; 3], p: [[f32; 3]; 3], t_min: f32, t_max: f32) -> Option<f32> {
+    let w = |a: [f32; 3]| a.map(|x| x as f64);
+    let (t64, dt64) = plane_t(w(o), w(d), p.map(w))?;
+    let t = if t64 > dt64 {
+        t64 as f32
+    } else if t64 >= -dt64 && t_min <= 0.0 {
+        hit_just_ahead(o, d, p)?
+    } else {
+        return None;
+    };
+    (t > t_min && t < t_max && t.is_finite()).then_some(t)
+}
+
+/// The ray's `t` at the triangle's plane and its error bound, computed as
+/// the watertight test does (shear, edge functions, scaled `t`), in f64.
+fn plane_t(o: [f64; 3], d: [f64; 3], p: [[f64; 3]; 3]) -> Option<(f64, f64)> {
+    let r = RayShear::new(o, d);
+    if r.flat {
+        return None;
+    }
+    let [kx, ky, kz] = r.k;
+    let mut t = [sub(p[0], o), sub(p[1], o), sub(p[2], o)];
+    for v in t.iter_mut() {
+        *v = [v[kx], v[ky], v[kz]];
+    }
+    let [sx, sy, sz] = r.s;
+    for v in t.iter_mut() {
+        v[0] += sx * v[2];
+        v[1] += sy * v[2];
+    }
+    let e0 = t[1][0] * t[2][1] - t[1][1] * t[2][0];
+    let e1 = t[2][0] * t[0][1] - t[2][1] * t[0][0];
+    let e2 = t[0][0] * t[1][1] - t[0][1] * t[1][0];
+    let det = e0 + e1 + e2;
+    if det == 0.0 {
+        return None;
+    }
+    for v in t.iter_mut() {
+        v[2] *= sz;
+    }
+    let ts = e0 * t[0][2] + e1 * t[1][2] + e2 * t[2][2];
+    let inv = 1.0 / det;
+    let max_zt = mx(mx(t[0][2].abs(), t[1][2].abs()), t[2][2].abs());
+    let max_xt = mx(mx(t[0][0].abs(), t[1][0].abs()), t[2][0].abs());
+    let max_yt = mx(mx(t[0][1].abs(), t[1][1].abs()), t[2][1].abs());
+    let dz = gamma::<f64>(3) * max_zt;
+    let dx = gamma::<f64>(5) * (max_xt + max_zt);
+    let dy = gamma::<f64>(5) * (max_yt + max_zt);
+    let de = 2.0 * (gamma::<f64>(2) * max_xt * max_yt + dy * max_xt + dx * max_yt);
+    let max_e = mx(mx(e0.abs(), e1.abs()), e2.abs());
+    let dt = 3.0 * (gamma::<f64>(3) * max_e * max_zt + de * max_zt + dz * max_e) * inv.abs();
+    Some((ts * inv, dt))
+}
+
+/// The `t` of a ray whose hit inside the triangle is too close to its origin
+/// for f64 to resolve: positive, when the origin lies strictly on the side
+/// of the plane the ray leaves from (Shewchuk's exact `orient3d`, via the
+/// `robust` crate); `None` when it lies in the plane or behind it.
+///
+/// Why: a camera one denormal above a floor, looking down at a shallow
+/// angle, meets the floor at t ≈ 1e-45, and the t bounds (f32 and f64
+/// alike) scale with the triangle's coordinates, not with t: without an
+/// exact test the floor vanishes from part of the image. The exact sign
+/// keeps rule 4's other half: an origin exactly in the plane never hits.
+#[cold]
+fn hit_just_ahead(o: [f32; 3], d: [f32; 3], p: [[f32; 3]; 3]) -> Option<f32> {
+    let c = |a: [f32; 3]| robust::Coord3D {
+        x: a[0] as f64,
+        y: a[1] as f64,
+        z: a[2] as f64,
+    };
+    // orient3d(a, b, c, o) = (a − o)·n with n = (b − a) × (c − a).
+    let side = robust::orient3d(c(p[0]), c(p[1]), c(p[2]), c(o));
+    let w = |a: [f32; 3]| a.map(|x| x as f64);
+    let (a, b, cc, o, d) = (w(p[0]), w(p[1]), w(p[2]), w(o), w(d));
+    let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let e2 = [cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]];
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let nd = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+    if !(side * nd > 0.0) {
+        return None;
+    }
+    let ao = [a[0] - o[0], a[1] - o[1], a[2] - o[2]];
+    let t = (n[0] * ao[0] + n[1] * ao[1] + n[2] * ao[2]) / nd;
+    // Positive by the exact test, whatever rounding made of it.
+    Some((t as f32).max(f32::from_bits(1)))
 }
 
 /// Watertight ray/triangle intersection in f32 with f64 rechecks. Accepts
@@ -238,30 +360,14 @@ pub fn intersect_triangle_sheared(
     t_max: f32,
 ) -> Option<TriHit<f32>> {
     let o = r.o;
-    // The f64 recheck applies its own (much smaller) error bound: a hit from
-    // an origin lying exactly in the triangle's plane has t = 0 up to
-    // rounding in f64 too, and must not count.
-    let recheck = || {
-        let w = |a: [f32; 3]| a.map(|x| x as f64);
-        match core(w(o), w(d), p.map(w), t_max as f64, false) {
-            Core::Hit(h, dt) if h.t > dt => {
-                let t = h.t as f32;
-                (t > t_min && t < t_max && t.is_finite()).then_some(TriHit {
-                    t,
-                    b: h.b.map(|x| x as f32),
-                })
-            }
-            _ => None,
-        }
-    };
     match core_sheared(r, p, t_max, true) {
         Core::Miss => None,
-        Core::Undecided => recheck(),
+        Core::Near(h) => resolve_t(o, d, p, t_min, t_max).map(|t| TriHit { t, b: h.b }),
         Core::Hit(h, dt) => {
             if !(h.t > t_min && h.t < t_max && h.t.is_finite()) {
                 None
             } else if h.t <= dt {
-                recheck()
+                resolve_t(o, d, p, t_min, t_max).map(|t| TriHit { t, b: h.b })
             } else {
                 Some(h)
             }
@@ -518,6 +624,50 @@ mod tests {
             }
             assert_eq!(leaks, 0, "leaks at |c| = {c}");
         }
+    }
+
+    /// An origin one denormal above a floor sees the floor in every
+    /// direction that goes down, however shallow, and one denormal below it
+    /// never does (f32 and f64 alike cannot tell t ≈ 1e-45 from 0: the exact
+    /// orientation decides). Issue 8: 4 % of such pixels used to miss.
+    #[test]
+    fn origin_a_denormal_above_a_floor_sees_it() {
+        let floor = [
+            [
+                [-10.0f32, 0.0, -10.0],
+                [10.0, 0.0, 10.0],
+                [10.0, 0.0, -10.0],
+            ],
+            [
+                [-10.0f32, 0.0, -10.0],
+                [-10.0, 0.0, 10.0],
+                [10.0, 0.0, 10.0],
+            ],
+        ];
+        let mut s = crate::RngState::seeded(17);
+        let (mut above_missed, mut below_hit) = (0, 0);
+        for _ in 0..50_000 {
+            let (x, z) = (s.range_f32(-5.0, 5.0), s.range_f32(-5.0, 5.0));
+            // Down at any angle, shallow ones included.
+            let d = [
+                s.range_f32(-1.0, 1.0),
+                -(10f32.powf(s.range_f32(-4.0, 0.0))),
+                s.range_f32(-1.0, 1.0),
+            ];
+            let hits = |y: f32| {
+                floor
+                    .iter()
+                    .filter(|t| intersect_triangle([x, y, z], d, **t, 0.0, f32::INFINITY).is_some())
+                    .count()
+            };
+            if hits(f32::from_bits(1)) == 0 {
+                above_missed += 1;
+            }
+            if hits(-f32::from_bits(1)) > 0 || hits(0.0) > 0 {
+                below_hit += 1;
+            }
+        }
+        assert_eq!((above_missed, below_hit), (0, 0));
     }
 
     /// docs/numerics.md T4: huge coordinates never give a non-finite t.

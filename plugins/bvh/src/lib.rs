@@ -1,6 +1,6 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::accel::{BuildParams, Bvh4, Nearest, Primitives};
+use rtk_kernel::accel::{cull_bound, BuildParams, Bvh4, Nearest, Primitives};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 
@@ -70,9 +70,11 @@ impl Object for Bvh {
         };
         let mut q = Nearest::new(ray);
         let mut nodes = 0;
-        bvh.traverse(ray, ray.t_max, &mut nodes, |leaf| {
+        // Boxes within the tie margin of the best hit are still entered
+        // (rule 11, `cull_bound`).
+        bvh.traverse(ray, cull_bound(ray.t_max), &mut nodes, |leaf| {
             prims.intersect_range(ctx, &mut q, leaf, hit, level);
-            Some(q.ray.t_max)
+            Some(cull_bound(q.ray.t_max))
         });
         ctx.stats.node_tests += nodes;
         q.found()
@@ -84,6 +86,7 @@ impl Object for Bvh {
         };
         let mut found = false;
         let mut nodes = 0;
+        // Any hit will do: no tie to keep, no margin.
         bvh.traverse(ray, ray.t_max, &mut nodes, |leaf| {
             found = prims.occluded_range(ctx, ray, leaf, level);
             (!found).then_some(ray.t_max)

@@ -9,11 +9,13 @@
 //! - A direction component that is ±0 never divides: the ray stays on its
 //!   origin's side, and an origin exactly on the plane visits both children.
 //! - A hit found in a leaf may lie beyond that leaf's cell (primitives span
-//!   cells), so a pending cell is skipped only when its entry is strictly
-//!   beyond the best hit: at equal `t` a later cell may still hold a lower
-//!   (child, primitive) key, which wins the tie.
+//!   cells), so a pending cell is skipped only when its entry lies beyond
+//!   the best hit by more than the kernel's tie margin (`cull_bound`): at
+//!   equal `t` a later cell may still hold a lower (child, primitive) key,
+//!   which wins the tie.
 
 use crate::tree::{KdTree, Node, MAX_DEPTH};
+use rtk_kernel::accel::cull_bound;
 use rtk_kernel::geom::{gamma, RayBoxPrecomp};
 use rtk_kernel::Ray;
 
@@ -141,8 +143,9 @@ impl KdTree {
             t1: h.t1,
         });
         while let Some(e) = next.take().or_else(|| stack.pop()) {
-            // Strictly beyond only: a tie at the best `t` may still be won here.
-            if e.t0 > t_best {
+            // Beyond the tie margin only: a tie at the best `t` may still be
+            // won here (`cull_bound`).
+            if e.t0 > cull_bound(t_best) {
                 continue;
             }
             *node_tests += 1;

@@ -1,6 +1,6 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::geom::{intersect_sphere, nearest_root, sphere_point_and_error};
+use rtk_kernel::geom::{intersect_sphere_in_f64, nearest_root, sphere_point_in_f64};
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -26,7 +26,7 @@ struct Sphere {
 impl Sphere {
     #[inline]
     fn root(&self, ray: &Ray) -> Option<f32> {
-        let h = intersect_sphere(
+        let h = intersect_sphere_in_f64(
             self.c.to_array(),
             self.r,
             ray.origin.to_array(),
@@ -93,7 +93,7 @@ impl Object for Sphere {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        let (p, err) = sphere_point_and_error(
+        let (p, err) = sphere_point_in_f64(
             self.c.to_array(),
             self.r,
             ray.origin.to_array(),
