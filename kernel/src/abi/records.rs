@@ -251,6 +251,19 @@ pub struct ObjectModule {
     /// rather than wrapped in the set's own acceleration structure.
     #[sabi(missing_field(default))]
     pub flattens_primitives: bool,
+    /// Area lights: a point uniformly distributed by area over the object's
+    /// surface, own space ([`SurfaceSample`]); false when it has no area.
+    /// Any object that offers it can be bound to an emitting shader, under
+    /// any transform (issue 9).
+    #[sabi(missing_field(default))]
+    pub sample_surface: Option<
+        unsafe extern "C" fn(
+            this: *const c_void,
+            ctx: *mut TraceCtx,
+            u: *const [f32; 2],
+            out: *mut SurfaceSample,
+        ) -> bool,
+    >,
 }
 
 /// A triangle mesh's data, lent by the object that owns it through the
@@ -345,6 +358,34 @@ pub struct ShaderModule {
             geom: *const LocalGeom,
         ) -> Color,
     >,
+    // ---- Appended after the ABI 2 prefix (issue 9): absent (None) in
+    // ---- shaders built before them, which then neither emit nor report a
+    // ---- density (an integrator must then not weight their samples by MIS).
+    /// Density (solid angle) with which `sample`, restricted to `lobes`,
+    /// returns `wi`; 0 for delta lobes.
+    #[sabi(missing_field(default))]
+    pub pdf: Option<
+        unsafe extern "C" fn(
+            this: *const c_void,
+            ctx: *mut TraceCtx,
+            geom: *const LocalGeom,
+            wo: *const Float3,
+            wi: *const Float3,
+            lobes: u32,
+        ) -> f32,
+    >,
+    /// Radiance the surface emits towards `wo` (unit, pointing away); only a
+    /// shader whose `lobes` has [`lobe::EMISSION`](super::lobe::EMISSION)
+    /// is asked.
+    #[sabi(missing_field(default))]
+    pub emitted: Option<
+        unsafe extern "C" fn(
+            this: *const c_void,
+            ctx: *mut TraceCtx,
+            geom: *const LocalGeom,
+            wo: *const Float3,
+        ) -> Color,
+    >,
 }
 
 /// The root module of an integrator plugin: the radiance of each camera ray.
@@ -427,6 +468,26 @@ pub struct LightModule {
         time: f32,
         out: *mut LightSample,
     ) -> bool,
+    // ---- Appended after the ABI 2 prefix (issue 9): absent (None) in
+    // ---- lights built before them.
+    /// Radiance arriving from direction `dir` (unit, towards the light) on
+    /// a ray that leaves the scene: environment lights answer, lights at a
+    /// point or a single direction have none to find.
+    #[sabi(missing_field(default))]
+    pub le: Option<
+        unsafe extern "C" fn(this: *const c_void, ctx: *mut TraceCtx, dir: *const Float3) -> Color,
+    >,
+    /// Density (solid angle) with which `sample_li` from `p` returns `wi`;
+    /// 0 for delta lights.
+    #[sabi(missing_field(default))]
+    pub pdf_li: Option<
+        unsafe extern "C" fn(
+            this: *const c_void,
+            ctx: *mut TraceCtx,
+            p: *const Float3,
+            wi: *const Float3,
+        ) -> f32,
+    >,
 }
 
 // --------------------------------------------------------------------------
@@ -487,6 +548,28 @@ pub struct SceneServices {
     #[sabi(last_prefix_field)]
     pub material:
         unsafe extern "C" fn(host: *const c_void, shader: u32, out: *mut ShaderRef) -> bool,
+    // ---- Appended after the ABI 2 prefix (issue 9): absent (None) from
+    // ---- hosts built before them.
+    /// Density (solid angle) with which `sample_light` of the light that
+    /// `ray` found, sampled from `p`, would have produced `ray`'s direction:
+    /// `geom` is the ray's hit on an emitting surface, or null when the ray
+    /// left the scene (the environment light's density; 0 without one). Per
+    /// light: the caller's own choice among the `light_count` lights is not
+    /// included. Multiple importance sampling weighs a BSDF sample that
+    /// found a light by it.
+    #[sabi(missing_field(default))]
+    pub light_pdf: Option<
+        unsafe extern "C" fn(
+            host: *const c_void,
+            ctx: *mut TraceCtx,
+            p: *const Float3,
+            ray: *const Ray,
+            geom: *const LocalGeom,
+        ) -> f32,
+    >,
+    /// The [`light_flag`](super::light_flag) bits of light `index`.
+    #[sabi(missing_field(default))]
+    pub light_flags: Option<unsafe extern "C" fn(host: *const c_void, index: u32) -> u32>,
 }
 
 /// The scene services with the host context they are called with.

@@ -182,8 +182,27 @@ pub mod lobe {
     pub const GLOSSY: u32 = 1 << 3;
     /// A delta (perfectly specular) lobe.
     pub const SPECULAR: u32 = 1 << 4;
-    /// Every lobe.
+    /// Every scattering lobe.
     pub const ALL: u32 = REFLECTION | TRANSMISSION | DIFFUSE | GLOSSY | SPECULAR;
+    /// Not a lobe: the material emits (answers `emitted`). The shell makes
+    /// every instance bound to such a shader an area light, so the bit must
+    /// be set by a shader that emits and only by one. Outside [`ALL`], which
+    /// filters scattering.
+    pub const EMISSION: u32 = 1 << 5;
+}
+
+/// A point sampled on an object's surface, uniformly by area in the
+/// object's own space (the `sample_surface` entry): its density is
+/// `1 / area` there. The host converts it to world space and to solid angle.
+#[repr(C)]
+#[derive(StableAbi, Clone, Copy, Debug, Default, PartialEq)]
+pub struct SurfaceSample {
+    /// The point.
+    pub p: Float3,
+    /// Geometric normal there (unit, the side `local_geom`'s `ng` faces).
+    pub n: Float3,
+    /// The object's total surface area, own space.
+    pub area: f32,
 }
 
 /// A scattering sample from a material.
@@ -199,6 +218,18 @@ pub struct BsdfSample {
     pub pdf: f32,
     /// The [`lobe`] bits of the lobe sampled.
     pub lobe: u32,
+}
+
+/// What kind of light a light index is (the `light_flags` service), so an
+/// integrator knows which samples multiple importance sampling can weigh.
+pub mod light_flag {
+    /// A point or a single direction: no ray can find it, its sample's
+    /// `pdf` is 1 and its `li` is irradiance.
+    pub const DELTA: u32 = 1;
+    /// Surrounds the scene: rays that leave the scene find it.
+    pub const ENVIRONMENT: u32 = 1 << 1;
+    /// An emitting instance's surface: rays can hit it.
+    pub const AREA: u32 = 1 << 2;
 }
 
 /// Kinds of rays, counted separately in the statistics.

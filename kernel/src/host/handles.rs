@@ -221,6 +221,21 @@ impl Object {
         // SAFETY: as in `intersect`.
         unsafe { (self.inner.class.local_geom())(self.inner.this, ctx, ray, hit, 0, mask, out) }
     }
+
+    /// Whether the class can sample its surface (be an area light).
+    pub fn samples_surface(&self) -> bool {
+        self.inner.class.sample_surface().is_some()
+    }
+
+    /// A point uniform by area on the surface, own space (`None` when the
+    /// class cannot sample its surface or it has no area).
+    #[inline]
+    pub fn sample_surface(&self, ctx: &mut TraceCtx, u: &[f32; 2]) -> Option<SurfaceSample> {
+        let f = self.inner.class.sample_surface()?;
+        let mut s = SurfaceSample::default();
+        // SAFETY: as in `intersect`.
+        unsafe { f(self.inner.this, ctx, u, &mut s) }.then_some(s)
+    }
 }
 
 // ---------------------------------------------------------------- other kinds
@@ -291,6 +306,24 @@ handle!(
 );
 
 impl Shader {
+    /// The [`lobe`](crate::lobe) kinds it reported when created.
+    pub fn lobes(&self) -> u32 {
+        self.lobes
+    }
+
+    /// Radiance emitted towards `wo` (black unless the shader emits).
+    #[inline]
+    pub fn emitted(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: Float3) -> Color {
+        if self.lobes & lobe::EMISSION == 0 {
+            return Color::BLACK;
+        }
+        match self.class.emitted() {
+            // SAFETY: the shader is live; the rest are references.
+            Some(f) => unsafe { f(self.this, ctx, geom, &wo) },
+            None => Color::BLACK,
+        }
+    }
+
     /// The record an integrator receives for material queries.
     pub(crate) fn raw(&self) -> ShaderRef {
         ShaderRef {
@@ -322,6 +355,35 @@ impl Light {
         let mut s = LightSample::default();
         // SAFETY: the light is live; the rest are references.
         unsafe { (self.class.sample_li())(self.this, ctx, p, u, time, &mut s) }.then_some(s)
+    }
+}
+
+impl Light {
+    /// Whether the light surrounds the scene (offers `le`).
+    pub fn is_environment(&self) -> bool {
+        self.class.le().is_some()
+    }
+
+    /// Radiance from direction `dir` on a ray that left the scene (black
+    /// for a light that is not an environment).
+    #[inline]
+    pub fn le(&self, ctx: &mut TraceCtx, dir: &Float3) -> Color {
+        match self.class.le() {
+            // SAFETY: the light is live; the rest are references.
+            Some(f) => unsafe { f(self.this, ctx, dir) },
+            None => Color::BLACK,
+        }
+    }
+
+    /// Density with which `sample_li` from `p` returns `wi` (0 for lights
+    /// that do not say: delta lights).
+    #[inline]
+    pub fn pdf_li(&self, ctx: &mut TraceCtx, p: &Float3, wi: &Float3) -> f32 {
+        match self.class.pdf_li() {
+            // SAFETY: the light is live; the rest are references.
+            Some(f) => unsafe { f(self.this, ctx, p, wi) },
+            None => 0.0,
+        }
     }
 }
 

@@ -98,6 +98,12 @@ pub trait Services: Sync + Sized {
     ) -> Option<LightSample>;
     /// The shader with id `shader`.
     fn material(&self, shader: u32) -> Option<&Shader>;
+    /// Density (solid angle, per light) with which sampling the light that
+    /// `ray` found from `p` gives its direction: `geom` is the ray's hit on
+    /// an emitting surface, `None` when it left the scene.
+    fn light_pdf(&self, ctx: &mut TraceCtx, p: Vec3, ray: &Ray, geom: Option<&LocalGeom>) -> f32;
+    /// The [`light_flag`] bits of light `index`.
+    fn light_flags(&self, index: u32) -> u32;
 }
 
 /// The scene-services record for host type `H`, built once per render.
@@ -127,6 +133,8 @@ impl<H: Services> ServicesTable<H> {
             light_count: svc_light_count::<H>,
             sample_light: svc_sample_light::<H>,
             material: svc_material::<H>,
+            light_pdf: Some(svc_light_pdf::<H>),
+            light_flags: Some(svc_light_flags::<H>),
         }
         .leak_into_prefix();
         ServicesTable {
@@ -245,6 +253,26 @@ unsafe extern "C" fn svc_background<H: Services>(
             h.background(c, &*ray)
         })
     }
+}
+
+unsafe extern "C" fn svc_light_pdf<H: Services>(
+    host: *const c_void,
+    ctx: *mut TraceCtx,
+    p: *const Float3,
+    ray: *const Ray,
+    geom: *const LocalGeom,
+) -> f32 {
+    // SAFETY: as above; `geom` is null or a valid record.
+    unsafe {
+        guard::<H, _>(host, ctx, "light_pdf", 0.0, |h, c| {
+            h.light_pdf(c, (*p).v(), &*ray, geom.as_ref())
+        })
+    }
+}
+
+unsafe extern "C" fn svc_light_flags<H: Services>(host: *const c_void, index: u32) -> u32 {
+    // SAFETY: as above.
+    unsafe { &*(host as *const H) }.light_flags(index)
 }
 
 unsafe extern "C" fn svc_light_count<H: Services>(host: *const c_void) -> u32 {

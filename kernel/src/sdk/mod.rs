@@ -52,7 +52,7 @@ pub use scene::{Material, Scene};
 #[doc(hidden)]
 pub use shims::{
     camera_module, integrator_module, leak, lib_header, light_module, object_module, shader_module,
-    Decl, Install, ModuleSource,
+    Decl, Install, ModuleSource, PDF_UNKNOWN,
 };
 
 /// An error from a plugin's cold call: the parameter key path it concerns (if
@@ -277,6 +277,17 @@ pub struct TriangleSlices<'a> {
 pub trait FlattensPrimitives: Object {}
 
 /// Capability: creation from a transform the shell composed and checked.
+/// Capability: points on the surface, uniform by area in the object's own
+/// space, so the object can be an area light under any transform (the host
+/// converts the density through the transform's area Jacobian).
+pub trait SampleSurface: Object {
+    /// The surface's total area, own space (0: no surface to sample).
+    fn area(&self) -> f32;
+    /// A point for `u` ∈ [0, 1)², uniform by area, with its geometric
+    /// normal facing as `local_geom`'s `ng` does.
+    fn sample_surface(&self, u: [f32; 2]) -> Option<(glam::Vec3, glam::Vec3)>;
+}
+
 /// The class named by [`crate::classes::INSTANCE_TRANSFORM`] offers it.
 pub trait FromTransform: Object {
     /// Create from the object-to-parent transform (f64, finite, well conditioned).
@@ -306,6 +317,30 @@ pub trait Shader: Plugin {
     ) -> Option<BsdfSample> {
         let _ = (ctx, geom, wo, u, lobes);
         None
+    }
+    /// Density (solid angle) with which [`Shader::sample`], restricted to
+    /// `lobes`, returns `wi`; 0 where only delta lobes could. `None` (the
+    /// default) says the shader cannot tell: a path tracer then does not
+    /// weight this material's samples by MIS (it counts light found by its
+    /// BSDF samples only through next-event estimation), which is unbiased
+    /// but noisier for glossy materials.
+    fn pdf(
+        &self,
+        ctx: &mut TraceCtx,
+        geom: &LocalGeom,
+        wo: glam::Vec3,
+        wi: glam::Vec3,
+        lobes: u32,
+    ) -> Option<f32> {
+        let _ = (ctx, geom, wo, wi, lobes);
+        None
+    }
+    /// Radiance emitted towards `wo`. Asked only when [`Shader::lobes`] has
+    /// [`lobe::EMISSION`]: a shader that emits must say so there, which also
+    /// makes every instance it is bound to an area light.
+    fn emitted(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: glam::Vec3) -> Color {
+        let _ = (ctx, geom, wo);
+        Color::BLACK
     }
 }
 
@@ -338,6 +373,15 @@ pub trait Light: Plugin {
         u: [f32; 2],
         time: f32,
     ) -> Option<LightSample>;
+}
+
+/// Capability: the light surrounds the scene, so rays that leave it find
+/// its radiance (a scene has at most one environment light).
+pub trait Environment: Light {
+    /// Radiance arriving from direction `dir` (unit, towards the light).
+    fn le(&self, ctx: &mut TraceCtx, dir: glam::Vec3) -> Color;
+    /// Density (solid angle) with which [`Light::sample_li`] returns `wi`.
+    fn pdf_li(&self, ctx: &mut TraceCtx, p: glam::Vec3, wi: glam::Vec3) -> f32;
 }
 
 /// Export an object class:
@@ -394,11 +438,14 @@ macro_rules! export_camera {
     };
 }
 
-/// Export a light. Same form as [`export_object!`].
+/// Export a light. Same form as [`export_object!`]; capability:
+/// `Environment`.
 #[macro_export]
 macro_rules! export_light {
-    ($ty:ty, class = $class:literal, doc = $doc:expr $(,)?) => {
-        $crate::__export_plugin!(Light, LightModuleRef, light_module, $ty, $class, $doc, []);
+    ($ty:ty, class = $class:literal, doc = $doc:expr
+     $(, capabilities = [$($cap:ident),* $(,)?])? $(,)?) => {
+        $crate::__export_plugin!(Light, LightModuleRef, light_module, $ty, $class, $doc,
+                                 [$($($cap),*)?]);
     };
 }
 

@@ -89,6 +89,38 @@ impl<'a> Scene<'a> {
             .then_some(s)
     }
 
+    /// Density (solid angle, per light) with which sampling the light that
+    /// `ray` found, from `p`, would have produced its direction: `geom` is
+    /// its hit on an emitting surface, `None` when it left the scene (the
+    /// environment light). 0 when there is no such light, or the host
+    /// predates the entry.
+    #[inline]
+    pub fn light_pdf(
+        &self,
+        ctx: &mut TraceCtx,
+        p: Vec3,
+        ray: &Ray,
+        geom: Option<&LocalGeom>,
+    ) -> f32 {
+        let Some(f) = self.r.services.light_pdf() else {
+            return 0.0;
+        };
+        let g = geom.map_or(std::ptr::null(), |g| g as *const LocalGeom);
+        // SAFETY: as in `trace`; `g` is null or a reference.
+        unsafe { f(self.r.host, ctx, &p.into(), ray, g) }
+    }
+
+    /// The [`light_flag`] bits of light `index`; a host that predates the
+    /// entry has only delta lights.
+    #[inline]
+    pub fn light_flags(&self, index: u32) -> u32 {
+        match self.r.services.light_flags() {
+            // SAFETY: as in `trace`.
+            Some(f) => unsafe { f(self.r.host, index) },
+            None => light_flag::DELTA,
+        }
+    }
+
     /// The material bound at `geom` (`None` when no shader is bound).
     #[inline]
     pub fn material(&self, geom: &LocalGeom) -> Option<Material<'a>> {
@@ -146,6 +178,40 @@ impl Material<'_> {
         // SAFETY: as in `eval`.
         unsafe { (self.r.class.sample())(self.r.this, ctx, geom, &wo.into(), &u, lobes, &mut s) }
             .then_some(s)
+    }
+
+    /// Density (solid angle) with which `sample` restricted to `lobes`
+    /// returns `wi`; `None` when the shader cannot tell (then do not weight
+    /// its samples by MIS).
+    #[inline]
+    pub fn pdf(
+        &self,
+        ctx: &mut TraceCtx,
+        geom: &LocalGeom,
+        wo: Vec3,
+        wi: Vec3,
+        lobes: u32,
+    ) -> Option<f32> {
+        let f = self.r.class.pdf()?;
+        ctx.stats.shader_calls += 1;
+        // SAFETY: as in `eval`.
+        let p = unsafe { f(self.r.this, ctx, geom, &wo.into(), &wi.into(), lobes) };
+        (p >= 0.0).then_some(p)
+    }
+
+    /// Radiance the surface emits towards `wo` (black for a material that
+    /// does not emit).
+    #[inline]
+    pub fn emitted(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: Vec3) -> Color {
+        if self.r.lobes & lobe::EMISSION == 0 {
+            return Color::BLACK;
+        }
+        let Some(f) = self.r.class.emitted() else {
+            return Color::BLACK;
+        };
+        ctx.stats.shader_calls += 1;
+        // SAFETY: as in `eval`.
+        unsafe { f(self.r.this, ctx, geom, &wo.into()) }
     }
 
     /// The shader's own shading, if it overrides the integrator's

@@ -259,3 +259,80 @@ mod tests {
         );
     }
 }
+
+/// A direction uniform over the unit sphere (density 1/4π).
+#[inline]
+pub fn uniform_sphere(u: [f32; 2]) -> Vec3 {
+    let z = 1.0 - 2.0 * u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u[1];
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Barycentric weights (b0, b1, b2) of a point uniform by area over a
+/// triangle (Pharr et al., pbrt-v4 §A.5.5's square-root map).
+#[inline]
+pub fn uniform_triangle(u: [f32; 2]) -> [f32; 3] {
+    let s = u[0].sqrt();
+    let (b1, b2) = (1.0 - s, u[1] * s);
+    [1.0 - b1 - b2, b1, b2]
+}
+
+/// Index of the entry of a cumulative table (`cdf[i]` = sum of the first
+/// `i + 1` weights, the last one the total) that `u` ∈ [0, 1) picks, and
+/// `u` rescaled into [0, 1) within that entry, so one number serves both.
+#[inline]
+pub fn pick_from_cdf(cdf: &[f64], u: f32) -> Option<(usize, f32)> {
+    let total = *cdf.last()?;
+    let x = u as f64 * total;
+    let i = cdf.partition_point(|&c| c <= x).min(cdf.len() - 1);
+    let lo = if i == 0 { 0.0 } else { cdf[i - 1] };
+    let w = cdf[i] - lo;
+    let r = if w > 0.0 { ((x - lo) / w) as f32 } else { 0.5 };
+    Some((i, r.clamp(0.0, 1.0 - f32::EPSILON / 2.0)))
+}
+
+#[cfg(test)]
+mod sampling_tests {
+    use super::*;
+
+    #[test]
+    fn cdf_picks_by_weight_and_reuses_the_number() {
+        let cdf = [1.0, 1.0, 4.0]; // weights 1, 0, 3
+        assert_eq!(pick_from_cdf(&cdf, 0.0), Some((0, 0.0)));
+        assert_eq!(pick_from_cdf(&cdf, 0.125).map(|p| p.0), Some(0));
+        let (i, r) = pick_from_cdf(&cdf, 0.625).unwrap();
+        assert_eq!(i, 2);
+        assert!((r - 0.5).abs() < 1e-6);
+        assert_eq!(pick_from_cdf(&cdf, 0.9999999).map(|p| p.0), Some(2));
+        assert_eq!(pick_from_cdf(&[], 0.5), None);
+    }
+
+    #[test]
+    fn uniform_triangle_mean_is_the_centroid() {
+        let mut rng = crate::RngState::seeded(7);
+        let mut m = [0.0f64; 3];
+        let n = 100_000;
+        for _ in 0..n {
+            let b = uniform_triangle([rng.next_f32(), rng.next_f32()]);
+            assert!(b.iter().all(|&x| (-1e-6..=1.0 + 1e-6).contains(&x)));
+            for k in 0..3 {
+                m[k] += b[k] as f64 / n as f64;
+            }
+        }
+        // Standard error of a mean of Beta(1,2)-like weights is ~0.0008.
+        assert!(m.iter().all(|&x| (x - 1.0 / 3.0).abs() < 0.004), "{m:?}");
+    }
+
+    #[test]
+    fn uniform_sphere_is_unit_and_centred() {
+        let mut rng = crate::RngState::seeded(3);
+        let mut m = Vec3::ZERO;
+        for _ in 0..100_000 {
+            let d = uniform_sphere([rng.next_f32(), rng.next_f32()]);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            m += d / 100_000.0;
+        }
+        assert!(m.length() < 0.01, "{m}");
+    }
+}

@@ -224,6 +224,7 @@ pub fn object_module<T: Object, D: Decl>() -> ObjectModule {
         occluded_prims: None,
         triangles: None,
         flattens_primitives: false,
+        sample_surface: None,
     }
 }
 
@@ -342,6 +343,67 @@ impl<T: FlattensPrimitives, D: Decl> Install<T, D> {
     /// Say that the aggregate flattens primitive sets.
     pub fn FlattensPrimitives(m: &mut ObjectModule) {
         m.flattens_primitives = true;
+    }
+}
+
+#[allow(non_snake_case)]
+impl<T: SampleSurface, D: Decl> Install<T, D> {
+    /// Offer points on the surface (area lights).
+    pub fn SampleSurface(m: &mut ObjectModule) {
+        m.sample_surface = Some(obj_sample_surface::<T, D>);
+    }
+}
+
+unsafe extern "C" fn obj_sample_surface<T: SampleSurface, D: Decl>(
+    this: *const c_void,
+    ctx: *mut TraceCtx,
+    u: *const [f32; 2],
+    out: *mut SurfaceSample,
+) -> bool {
+    // SAFETY: the caller passes the live object and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "sample_surface", false, |_| {
+            let o = obj::<T>(this);
+            let area = o.area();
+            let s = o.sample_surface(*u).map(|(p, n)| SurfaceSample {
+                p: p.into(),
+                n: n.into(),
+                area,
+            });
+            write_some(out, s.filter(|_| area > 0.0))
+        })
+    }
+}
+
+#[allow(non_snake_case)]
+impl<T: Environment, D: Decl> Install<T, D> {
+    /// Say the light surrounds the scene.
+    pub fn Environment(m: &mut LightModule) {
+        m.le = Some(light_le::<T, D>);
+        m.pdf_li = Some(light_pdf_li::<T, D>);
+    }
+}
+
+unsafe extern "C" fn light_le<T: Environment, D: Decl>(
+    this: *const c_void,
+    ctx: *mut TraceCtx,
+    dir: *const Float3,
+) -> Color {
+    // SAFETY: the caller passes the live light and valid records.
+    unsafe { hot::<D, _>(ctx, "le", Color::BLACK, |ctx| obj::<T>(this).le(ctx, (*dir).v())) }
+}
+
+unsafe extern "C" fn light_pdf_li<T: Environment, D: Decl>(
+    this: *const c_void,
+    ctx: *mut TraceCtx,
+    p: *const Float3,
+    wi: *const Float3,
+) -> f32 {
+    // SAFETY: the caller passes the live light and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "pdf_li", 0.0, |ctx| {
+            obj::<T>(this).pdf_li(ctx, (*p).v(), (*wi).v())
+        })
     }
 }
 
@@ -536,6 +598,43 @@ pub fn shader_module<T: Shader, D: Decl>() -> ShaderModule {
         eval: sh_eval::<T, D>,
         sample: sh_sample::<T, D>,
         shade: None,
+        pdf: Some(sh_pdf::<T, D>),
+        emitted: Some(sh_emitted::<T, D>),
+    }
+}
+
+/// `pdf`'s answer when the shader cannot tell ([`Shader::pdf`] is `None`).
+pub const PDF_UNKNOWN: f32 = -1.0;
+
+unsafe extern "C" fn sh_pdf<T: Shader, D: Decl>(
+    this: *const c_void,
+    ctx: *mut TraceCtx,
+    geom: *const LocalGeom,
+    wo: *const Float3,
+    wi: *const Float3,
+    lobes: u32,
+) -> f32 {
+    // SAFETY: the caller passes the live shader and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "pdf", PDF_UNKNOWN, |ctx| {
+            obj::<T>(this)
+                .pdf(ctx, &*geom, (*wo).v(), (*wi).v(), lobes)
+                .unwrap_or(PDF_UNKNOWN)
+        })
+    }
+}
+
+unsafe extern "C" fn sh_emitted<T: Shader, D: Decl>(
+    this: *const c_void,
+    ctx: *mut TraceCtx,
+    geom: *const LocalGeom,
+    wo: *const Float3,
+) -> Color {
+    // SAFETY: the caller passes the live shader and valid records.
+    unsafe {
+        hot::<D, _>(ctx, "emitted", Color::BLACK, |ctx| {
+            obj::<T>(this).emitted(ctx, &*geom, (*wo).v())
+        })
     }
 }
 
@@ -660,6 +759,8 @@ pub fn light_module<T: Light, D: Decl>() -> LightModule {
         create: create::<T>,
         destroy: destroy::<T>,
         sample_li: light_sample_li::<T, D>,
+        le: None,
+        pdf_li: None,
     }
 }
 

@@ -1,7 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::shading::{cosine_lobe_sample, same_side};
+use rtk_kernel::sdk::shading::{cosine_lobe_sample, cosine_pdf, same_side};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::f32::consts::FRAC_1_PI;
@@ -11,6 +11,8 @@ use std::f32::consts::FRAC_1_PI;
 struct Params {
     #[serde(default = "half")]
     albedo: [f32; 3],
+    #[serde(default)]
+    emission: [f32; 3],
 }
 
 fn half() -> [f32; 3] {
@@ -20,6 +22,8 @@ fn half() -> [f32; 3] {
 struct Lambert {
     /// albedo / π.
     f: Color,
+    /// Radiance emitted on the front side (black: it does not emit).
+    le: Color,
 }
 
 impl Plugin for Lambert {
@@ -28,13 +32,15 @@ impl Plugin for Lambert {
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
         Ok(Lambert {
             f: params::reflectance("albedo", p.albedo)?.scale(FRAC_1_PI),
+            le: params::color("emission", p.emission)?,
         })
     }
 }
 
 impl Shader for Lambert {
     fn lobes(&self) -> u32 {
-        lobe::DIFFUSE | lobe::REFLECTION
+        let emits = if self.le.is_black() { 0 } else { lobe::EMISSION };
+        lobe::DIFFUSE | lobe::REFLECTION | emits
     }
 
     fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
@@ -58,6 +64,24 @@ impl Shader for Lambert {
             return None;
         }
         cosine_lobe_sample(g, wo, u, lobe::DIFFUSE | lobe::REFLECTION, |_| self.f)
+    }
+
+    fn pdf(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3, lobes: u32) -> Option<f32> {
+        let ours = lobe::DIFFUSE | lobe::REFLECTION;
+        Some(if lobes & ours == ours {
+            cosine_pdf(g, wo, wi)
+        } else {
+            0.0
+        })
+    }
+
+    /// Front side only: the side the geometric normal faces.
+    fn emitted(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3) -> Color {
+        if g.ng.v().dot(wo) > 0.0 {
+            self.le
+        } else {
+            Color::BLACK
+        }
     }
 }
 

@@ -5,7 +5,8 @@ mod obj;
 mod ply;
 
 use rtk_kernel::geom::{intersect_triangle, triangle_point_inset};
-use rtk_kernel::glam::Vec3;
+use rtk_kernel::glam::{self, Vec3};
+use rtk_kernel::sdk::shading::{pick_from_cdf, uniform_triangle};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::path::PathBuf;
@@ -46,6 +47,9 @@ struct Mesh {
     tv: Vec<[[f32; 3]; 3]>,
     /// 0..n: every triangle, for the brute-force queries.
     all_ids: Vec<u32>,
+    /// Running sum of the triangles' areas (f64, so a million small
+    /// triangles add up exactly enough): area lights pick a triangle by it.
+    area_cdf: Vec<f64>,
 }
 
 impl Mesh {
@@ -147,6 +151,7 @@ impl Plugin for Mesh {
             bounds: Bounds3::EMPTY,
             tv: vec![],
             all_ids: vec![],
+            area_cdf: vec![],
         })
     }
 }
@@ -176,6 +181,16 @@ impl Object for Mesh {
             })
             .collect();
         self.all_ids = (0..self.tris.len() as u32).collect();
+        let mut sum = 0.0f64;
+        self.area_cdf = self
+            .tv
+            .iter()
+            .map(|v| {
+                let w = |i: usize| glam::DVec3::from(v[i].map(f64::from));
+                sum += 0.5 * (w(1) - w(0)).cross(w(2) - w(0)).length();
+                sum
+            })
+            .collect();
         self.uv = m.uvs;
         self.vn = match (self.normals_mode, m.normals) {
             (Normals::Face, _) => None,
@@ -342,9 +357,25 @@ impl Triangles for Mesh {
     }
 }
 
+impl SampleSurface for Mesh {
+    fn area(&self) -> f32 {
+        self.area_cdf.last().copied().unwrap_or(0.0) as f32
+    }
+
+    fn sample_surface(&self, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
+        let (i, u0) = pick_from_cdf(&self.area_cdf, u[0])?;
+        let v = self.tv[i].map(Vec3::from);
+        let b = uniform_triangle([u0, u[1]]);
+        let p = v[0] + b[1] * (v[1] - v[0]) + b[2] * (v[2] - v[0]);
+        // The normal `local_geom` reports as `ng`.
+        let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+        (n != Vec3::ZERO).then_some((p, n))
+    }
+}
+
 rtk_kernel::export_object!(
     Mesh,
     class = "mesh",
     doc = include_str!("../README.md"),
-    capabilities = [PrimitiveSet, Triangles]
+    capabilities = [PrimitiveSet, Triangles, SampleSurface]
 );

@@ -126,4 +126,20 @@ impl Object for Sphere {
     }
 }
 
-rtk_kernel::export_object!(Sphere, class = "sphere", doc = include_str!("../README.md"));
+impl SampleSurface for Sphere {
+    fn area(&self) -> f32 {
+        4.0 * std::f32::consts::PI * self.r * self.r
+    }
+
+    fn sample_surface(&self, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
+        let n = rtk_kernel::sdk::shading::uniform_sphere(u);
+        Some((self.c + self.r * n, n))
+    }
+}
+
+rtk_kernel::export_object!(
+    Sphere,
+    class = "sphere",
+    doc = include_str!("../README.md"),
+    capabilities = [SampleSurface]
+);

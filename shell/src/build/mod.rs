@@ -8,11 +8,13 @@
 //! 3. create the camera, integrator and lights;
 //! 4. [`objects`]: create each reachable object definition once, bottom-up.
 
+mod emitters;
 mod needs;
 mod objects;
 mod prepare;
 mod reach;
 
+pub use emitters::Emitter;
 pub use prepare::{Parallel, Sequential};
 
 use crate::desc::{Def, Desc};
@@ -55,8 +57,16 @@ pub struct World {
     pub camera: Camera,
     /// The integrator.
     pub integrator: Integrator,
-    /// The lights.
+    /// The lights the scene lists (`[lights]`).
     pub lights: Vec<Light>,
+    /// Index in `lights` of the environment light, if there is one.
+    pub environment: Option<usize>,
+    /// The emitting instances (area lights), after `lights` in the light
+    /// indices integrators see.
+    pub emitters: Vec<Emitter>,
+    /// For each shader id, the index in `emitters` of the instance it is
+    /// bound to (`u32::MAX` for shaders that do not emit).
+    pub emitter_of_shader: Vec<u32>,
     /// The shaders, indexed by shader id.
     pub shaders: Vec<Shader>,
     /// The plugins loaded for this scene.
@@ -111,6 +121,8 @@ fn build_world(
     let root_inst = &desc.render.root;
     let root = b.instance(root_inst, false, true)?;
     let root_bind = b.bindings(root_inst)?;
+    let emitters = b.emitters(root_inst)?;
+    let environment = environment(&desc, &lights)?;
     let bounds = root.bounds(0.0, 1.0).map_err(|e| {
         SceneError::new(
             ErrorKind::PluginCall,
@@ -133,6 +145,10 @@ fn build_world(
         prepare_by_class: std::mem::take(&mut b.prepare_by_class),
     };
     let (shaders, objects_created) = (std::mem::take(&mut b.shaders), b.objects_created);
+    let mut emitter_of_shader = vec![u32::MAX; shaders.len()];
+    for (i, e) in emitters.iter().enumerate() {
+        emitter_of_shader[e.shader as usize] = i as u32;
+    }
     drop(b);
     Ok(World {
         desc,
@@ -142,12 +158,49 @@ fn build_world(
         camera,
         integrator,
         lights,
+        environment,
+        emitters,
+        emitter_of_shader,
         shaders,
         plugins,
         files_read,
         timings,
         objects_created,
     })
+}
+
+/// The environment light's index: at most one light may surround the scene,
+/// and then `[render] background` must be left black (a ray that leaves the
+/// scene finds the environment; two sources would be two answers).
+fn environment(desc: &Desc, lights: &[Light]) -> Result<Option<usize>, SceneError> {
+    let defs: Vec<_> = desc.lights.values().collect();
+    let envs: Vec<usize> = (0..lights.len())
+        .filter(|&i| lights[i].is_environment())
+        .collect();
+    match envs[..] {
+        [] => Ok(None),
+        [i] => {
+            if desc.render.background != [0.0; 3] {
+                let d = defs[i];
+                return Err(SceneError::invalid(
+                    &d.class_origin,
+                    d.path(),
+                    "class",
+                    "an environment light and `[render] background` both say what rays that                      leave the scene find; remove the background",
+                ));
+            }
+            Ok(Some(i))
+        }
+        [_, j, ..] => {
+            let d = defs[j];
+            Err(SceneError::invalid(
+                &d.class_origin,
+                d.path(),
+                "class",
+                "a scene has at most one environment light",
+            ))
+        }
+    }
 }
 
 /// What a scene has besides objects and shaders.

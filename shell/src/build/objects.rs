@@ -46,6 +46,9 @@ pub(crate) struct Builder<'a> {
     /// every instance.
     wrapped: HashMap<(String, bool), Object>,
     shader_ids: BTreeMap<ShaderKey, u32>,
+    /// Shader definitions that emit: each instance binding them gets a
+    /// shader id of its own, so a hit names its area light (emitters.rs).
+    emissive: std::collections::BTreeSet<String>,
     pub shaders: Vec<Shader>,
     pub objects_created: usize,
     pub create_time: Duration,
@@ -70,6 +73,7 @@ impl<'a> Builder<'a> {
             accel: BTreeMap::new(),
             wrapped: HashMap::new(),
             shader_ids: BTreeMap::new(),
+            emissive: Default::default(),
             shaders: Vec::new(),
             objects_created: 0,
             create_time: Duration::ZERO,
@@ -245,18 +249,25 @@ impl<'a> Builder<'a> {
         Ok(o)
     }
 
+    /// The object made for a definition (not its acceleration wrapper).
+    pub(crate) fn made_object(&self, name: &str, shifted: bool) -> Option<Object> {
+        self.made.get(&(name.to_string(), shifted)).cloned()
+    }
+
     /// An instance's bindings: the id of its shader (created, or specialised
     /// by its attribute block, on first use).
     pub(crate) fn bindings(&mut self, inst: &Instance) -> Result<InstanceData, SceneError> {
         let Some(s) = &inst.shader else {
             return Ok(InstanceData::NONE);
         };
-        let key = match &inst.attributes {
-            Some(_) => ShaderKey::WithAttributes {
-                shader: s.clone(),
-                instance: inst.path.clone(),
-            },
-            None => ShaderKey::Plain(s.clone()),
+        let own = ShaderKey::WithAttributes {
+            shader: s.clone(),
+            instance: inst.path.clone(),
+        };
+        let key = if inst.attributes.is_some() || self.emissive.contains(s) {
+            own.clone()
+        } else {
+            ShaderKey::Plain(s.clone())
         };
         if let Some(id) = self.shader_ids.get(&key) {
             return Ok(InstanceData { shader: *id });
@@ -264,9 +275,15 @@ impl<'a> Builder<'a> {
         let desc = self.desc;
         let def = &desc.shaders[s];
         let shader = self.create_shader(def, inst.attributes.as_ref())?;
+        let emits = shader.lobes() & rtk_kernel::lobe::EMISSION != 0;
         let id = self.shaders.len() as u32;
         self.shaders.push(shader);
-        self.shader_ids.insert(key, id);
+        if emits {
+            self.emissive.insert(s.clone());
+            self.shader_ids.insert(own, id);
+        } else {
+            self.shader_ids.insert(key, id);
+        }
         Ok(InstanceData { shader: id })
     }
 
