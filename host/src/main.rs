@@ -1,7 +1,11 @@
 //! `rtk`: render TOML scenes with plugin object classes, shaders, integrators,
 //! cameras and lights.
 
+mod analytic;
+mod converge;
+mod images;
 mod output;
+mod plot;
 mod rays;
 mod render;
 mod stress;
@@ -36,6 +40,18 @@ enum Command {
     /// Run the numerical-stability catalogue (docs/numerics.md) through the
     /// real plugins: one line per case, metric, value, target, pass or fail.
     Stress(stress::StressArgs),
+    /// Render a scene at several sample counts and seeds, timing each
+    /// render and measuring its error against a reference: a CSV, a log-log
+    /// plot of RMSE against seconds, the fitted slope, and the equal-error
+    /// time ratio against another renderer's curve (--compare).
+    Converge(converge::ConvergeArgs),
+    /// RMSE and relMSE of image A against reference B (.exr, .pfm, .npy, .png).
+    Diff {
+        /// The image.
+        a: PathBuf,
+        /// The reference.
+        b: PathBuf,
+    },
     /// List every plugin on the plugin path with its kind and parameters.
     Plugins {
         /// Extra folders to search first (repeatable).
@@ -87,6 +103,10 @@ fn main() {
         Command::Render(a) => cmd_render(a, start),
         Command::Trace(a) => cmd_trace(a),
         Command::Stress(a) => pool(a.threads).and_then(|(pool, _)| stress::run(a, &pool)),
+        Command::Converge(a) => {
+            pool(a.threads).and_then(|(pool, threads)| converge::run(a, &pool, threads))
+        }
+        Command::Diff { a, b } => cmd_diff(&a, &b),
         Command::Plugins { plugin_path, short } => cmd_plugins(&plugin_path, short),
     };
     if let Err(e) = res {
@@ -150,26 +170,18 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     }
 
     let t_parse = Instant::now();
-    let mut file = rtk_shell::SceneFile::read(&a.scene)?;
-    file.apply_overrides(&sets)?;
-    let desc = rtk_shell::Desc::from_file(&file)?;
-    if a.safe {
-        rtk_shell::safe::check(&file, &desc)?;
-    }
+    let (file, desc) = read_scene(&a.scene, &sets, a.safe)?;
     let parse_time = t_parse.elapsed();
 
     let out = output_path(&a, desc.render.output.as_deref());
     output::check_writable(&out)?;
-    let film = render::Film::new(desc.render.width, desc.render.height)
-        .map_err(|m| anyhow::anyhow!("{}: {m}", a.scene.display()))?;
+    let film = new_film(&desc, &a.scene)?;
 
-    let mut registry = Registry::new(PluginPath::standard(&a.plugin_path));
-    let world = rtk_shell::build(&file, desc, &mut registry, &Pool(&pool))?;
+    let world = build_world(&file, desc, &a.plugin_path, &pool)?;
 
     let tracer = tracer::Tracer::new(&world);
     let t_render = Instant::now();
-    let film = render::render(&tracer, &pool, !a.quiet, film)
-        .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", a.scene.display()))?;
+    let film = render_film(&tracer, &pool, !a.quiet, film, &a.scene)?;
     let render_time = t_render.elapsed();
     let t_write = Instant::now();
     output::write(&film, &out)?;
@@ -200,6 +212,68 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
             start.elapsed().as_secs_f64()
         );
     }
+    Ok(())
+}
+
+/// Read a scene file and apply `--set` overrides; with `safe`, check it
+/// (`--safe`). Returns the file and its description.
+pub(crate) fn read_scene(
+    scene: &Path,
+    sets: &[String],
+    safe: bool,
+) -> Result<(rtk_shell::SceneFile, rtk_shell::Desc)> {
+    let mut file = rtk_shell::SceneFile::read(scene)?;
+    file.apply_overrides(sets)?;
+    let desc = rtk_shell::Desc::from_file(&file)?;
+    if safe {
+        rtk_shell::safe::check(&file, &desc)?;
+    }
+    Ok((file, desc))
+}
+
+/// A black film of the scene's image size (allocated fallibly).
+pub(crate) fn new_film(desc: &rtk_shell::Desc, scene: &Path) -> Result<render::Film> {
+    render::Film::new(desc.render.width, desc.render.height)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", scene.display()))
+}
+
+/// Load the plugins the scene needs (searching `plugin_path` first) and
+/// build its world on the pool.
+pub(crate) fn build_world(
+    file: &rtk_shell::SceneFile,
+    desc: rtk_shell::Desc,
+    plugin_path: &[PathBuf],
+    pool: &rayon::ThreadPool,
+) -> Result<rtk_shell::World> {
+    let mut registry = Registry::new(PluginPath::standard(plugin_path));
+    Ok(rtk_shell::build(file, desc, &mut registry, &Pool(pool))?)
+}
+
+/// Render the world (its `[render]` settings: size, spp, seed) into `film`.
+pub(crate) fn render_film(
+    tracer: &tracer::Tracer,
+    pool: &rayon::ThreadPool,
+    progress: bool,
+    film: render::Film,
+    scene: &Path,
+) -> Result<render::Film> {
+    render::render(tracer, pool, progress, film)
+        .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", scene.display()))
+}
+
+/// `rtk diff A B`: the metrics of A against the reference B.
+fn cmd_diff(a: &Path, b: &Path) -> Result<()> {
+    let img = images::read(a)?;
+    let reference = images::read(b)?;
+    images::check_same_size(
+        (img.width, img.height),
+        &a.display().to_string(),
+        (reference.width, reference.height),
+        &b.display().to_string(),
+    )?;
+    let m = images::metrics(&img.data, &reference.data);
+    println!("rmse {}", m.rmse);
+    println!("relmse {}", m.relmse);
     Ok(())
 }
 

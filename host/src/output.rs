@@ -116,25 +116,30 @@ pub fn srgb8(v: f64) -> u8 {
 /// Write the film atomically.
 pub fn write(film: &Film, path: &Path) -> Result<()> {
     let fmt = format_of(path)?;
-    let tmp = temp_path(path, "tmp");
-    let res = (|| -> Result<()> {
+    write_atomically(path, |tmp| {
         match fmt {
             Format::Png => {
                 let data = converted(film, srgb8)?;
                 let img = image::RgbImage::from_raw(film.width, film.height, data)
                     .context("image size")?;
-                img.save_with_format(&tmp, image::ImageFormat::Png)?;
+                img.save_with_format(tmp, image::ImageFormat::Png)?;
             }
             Format::Exr => {
                 let data = converted(film, |v| v as f32)?;
                 let img = image::Rgb32FImage::from_raw(film.width, film.height, data)
                     .context("image size")?;
-                img.save_with_format(&tmp, image::ImageFormat::OpenExr)?;
+                img.save_with_format(tmp, image::ImageFormat::OpenExr)?;
             }
         }
-        std::fs::rename(&tmp, path)?;
         Ok(())
-    })();
+    })
+}
+
+/// Write `path` atomically: `fill` writes a temporary file beside it, which
+/// is renamed into place only if `fill` succeeds (and removed otherwise).
+pub fn write_atomically(path: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let tmp = temp_path(path, "tmp");
+    let res = fill(&tmp).and_then(|()| Ok(std::fs::rename(&tmp, path)?));
     if res.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
