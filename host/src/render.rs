@@ -5,6 +5,7 @@
 use crate::tracer::Tracer;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rtk_kernel::abi::*;
+use rtk_shell::desc::render::Filter;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 
@@ -87,11 +88,48 @@ struct Job<'a, 'w> {
     height: u32,
     spp: u32,
     seed: u64,
+    filter: Option<Filter>,
     tiles_x: u32,
     threads: u32,
     /// Per thread: the next query id (mailbox ids never repeat on a thread).
     next_query: Vec<AtomicU64>,
     failure: Failure,
+}
+
+/// Where in the pixel a sample looks, from the pixel's corner: drawn from
+/// the pixel filter's own distribution (so every sample weighs 1). Without
+/// a filter, one sample looks through the centre (a 1-spp image is the
+/// exact pinhole image) and more spread uniformly (a box).
+#[inline]
+fn film_offset(filter: Option<Filter>, spp: u32, rng: &mut RngState) -> (f32, f32) {
+    match filter {
+        None if spp == 1 => (0.5, 0.5),
+        None | Some(Filter::Box) => (rng.next_f32(), rng.next_f32()),
+        Some(Filter::Tent) => {
+            let tent = |u: f32| {
+                if u < 0.5 {
+                    (2.0 * u).sqrt() - 1.0
+                } else {
+                    1.0 - (2.0 - 2.0 * u).sqrt()
+                }
+            };
+            (0.5 + tent(rng.next_f32()), 0.5 + tent(rng.next_f32()))
+        }
+        Some(Filter::Gaussian) => {
+            // Box–Muller, σ = 0.5 pixel, both coordinates redrawn while
+            // either falls beyond 3σ (0.5 % of draws).
+            for _ in 0..64 {
+                let (u1, u2) = (1.0 - rng.next_f32(), rng.next_f32());
+                let r = 0.5 * (-2.0 * u1.ln()).sqrt();
+                let a = std::f32::consts::TAU * u2;
+                let (x, y) = (r * a.cos(), r * a.sin());
+                if x.abs() <= 1.5 && y.abs() <= 1.5 {
+                    return (0.5 + x, 0.5 + y);
+                }
+            }
+            (0.5, 0.5)
+        }
+    }
 }
 
 /// Render the world's image on the pool's threads into `film` (of the
@@ -110,22 +148,32 @@ pub fn render(
         height: r.height,
         spp: r.spp,
         seed: r.seed,
+        filter: r.filter,
         tiles_x: r.width.div_ceil(TILE),
         threads: threads as u32,
         next_query: (0..threads).map(|_| AtomicU64::new(0)).collect(),
         failure: Failure::default(),
     };
     let n_tiles = job.tiles_x * r.height.div_ceil(TILE);
-    let bar = progress_bar(n_tiles as u64, progress);
+    let total = r.width as u64 * r.height as u64 * r.spp as u64;
+    let bar = progress_bar(total, progress);
+    let (started, drawn) = (std::time::Instant::now(), AtomicBool::new(!progress));
     let film = Mutex::new(film);
     pool.install(|| {
         use rayon::prelude::*;
         (0..n_tiles).into_par_iter().for_each(|t| {
             let tile = job.tile(t);
+            let samples = tile.pixels.len() as u64 * job.spp as u64;
             if let Ok(mut f) = film.lock() {
                 job.place(&mut f, tile);
             }
-            bar.inc(1);
+            bar.inc(samples);
+            if !drawn.load(Ordering::Relaxed)
+                && started.elapsed().as_secs_f32() > 1.0
+                && !drawn.swap(true, Ordering::Relaxed)
+            {
+                bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
+            }
         })
     });
     bar.finish_and_clear();
@@ -136,14 +184,18 @@ pub fn render(
         .map_err(|_| "a render thread failed".to_string())
 }
 
+/// The progress bar: camera samples done, their rate and the time left.
+/// Hidden with `-q` and when stderr is not a terminal (the caller decides
+/// `shown`), and drawn only once the render has run for a second, so short
+/// renders print nothing.
 fn progress_bar(n: u64, shown: bool) -> ProgressBar {
     if !shown {
         return ProgressBar::hidden();
     }
-    let b = ProgressBar::with_draw_target(Some(n), ProgressDrawTarget::stderr());
+    let b = ProgressBar::with_draw_target(Some(n), ProgressDrawTarget::hidden());
     b.set_style(
         ProgressStyle::with_template(
-            "{spinner} rendering [{bar:40}] {percent:>3}% tiles, {elapsed} elapsed, ETA {eta}",
+            "rendering [{bar:32}] {percent:>3}%  {human_per_sec} samples/s  {elapsed} elapsed, ETA {eta}",
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar())
         .progress_chars("=> "),
@@ -193,12 +245,7 @@ impl Job<'_, '_> {
         let mut sum = [0.0f64; 3];
         for s in 0..self.spp {
             ctx.rng = RngState::for_sample(self.seed, pixel, s as u64);
-            // One sample: the pixel centre; more: uniform jitter.
-            let (jx, jy) = if self.spp == 1 {
-                (0.5, 0.5)
-            } else {
-                (ctx.rng.next_f32(), ctx.rng.next_f32())
-            };
+            let (jx, jy) = film_offset(self.filter, self.spp, &mut ctx.rng);
             let sample = CameraSample {
                 film: [
                     (x as f32 + jx) / self.width as f32,

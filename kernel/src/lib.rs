@@ -37,8 +37,8 @@ mod values;
 pub mod xform;
 
 pub use abi::values::{
-    geom_mask, light_flag, lobe, ray_kind, Bounds3, BsdfSample, CameraSample, Color, Float3, Hit, HitEntry,
-    InstanceData, LightSample, LocalGeom, Ray, SurfaceSample, HIT_STACK_DEPTH, NONE_ID,
+    geom_mask, light_flag, lobe, ray_kind, Bounds3, BsdfSample, CameraSample, Color, Float3, Hit,
+    HitEntry, InstanceData, LightSample, LocalGeom, Ray, SurfaceSample, HIT_STACK_DEPTH, NONE_ID,
 };
 pub use abi::{RngState, Stats, TraceCtx};
 pub use glam;

@@ -2,15 +2,19 @@
 
 mod aggregates;
 mod bad_scenes;
+mod distributed;
 mod dropin;
 mod hostile;
 mod hygiene;
 mod loading;
+mod materials;
 mod panics;
+mod path;
 mod quadrics;
 mod refusals;
 mod shading;
 mod silhouette;
 mod stress;
+mod thinlens;
 mod trace;
 mod whitted;

@@ -40,6 +40,7 @@ pub mod params;
 mod scene;
 pub mod shading;
 pub(crate) mod shims;
+pub mod texture;
 
 use crate::abi::*;
 use glam::Vec3;

@@ -390,7 +390,11 @@ unsafe extern "C" fn light_le<T: Environment, D: Decl>(
     dir: *const Float3,
 ) -> Color {
     // SAFETY: the caller passes the live light and valid records.
-    unsafe { hot::<D, _>(ctx, "le", Color::BLACK, |ctx| obj::<T>(this).le(ctx, (*dir).v())) }
+    unsafe {
+        hot::<D, _>(ctx, "le", Color::BLACK, |ctx| {
+            obj::<T>(this).le(ctx, (*dir).v())
+        })
+    }
 }
 
 unsafe extern "C" fn light_pdf_li<T: Environment, D: Decl>(

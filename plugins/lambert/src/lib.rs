@@ -2,6 +2,7 @@
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::{cosine_lobe_sample, cosine_pdf, same_side};
+use rtk_kernel::sdk::texture::{Texture, TextureParam};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::f32::consts::FRAC_1_PI;
@@ -10,18 +11,18 @@ use std::f32::consts::FRAC_1_PI;
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
     #[serde(default = "half")]
-    albedo: [f32; 3],
+    albedo: TextureParam,
     #[serde(default)]
     emission: [f32; 3],
 }
 
-fn half() -> [f32; 3] {
-    [0.5; 3]
+fn half() -> TextureParam {
+    TextureParam::constant([0.5; 3])
 }
 
 struct Lambert {
-    /// albedo / π.
-    f: Color,
+    /// The albedo, a constant colour or a texture over uv.
+    albedo: Texture,
     /// Radiance emitted on the front side (black: it does not emit).
     le: Color,
 }
@@ -29,24 +30,36 @@ struct Lambert {
 impl Plugin for Lambert {
     type Params = Params;
 
-    fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
         Ok(Lambert {
-            f: params::reflectance("albedo", p.albedo)?.scale(FRAC_1_PI),
+            albedo: p.albedo.reflectance("albedo", env)?,
             le: params::color("emission", p.emission)?,
         })
     }
 }
 
+impl Lambert {
+    /// The BRDF at the hit: albedo / π.
+    #[inline]
+    fn f(&self, g: &LocalGeom) -> Color {
+        self.albedo.at(g).scale(FRAC_1_PI)
+    }
+}
+
 impl Shader for Lambert {
     fn lobes(&self) -> u32 {
-        let emits = if self.le.is_black() { 0 } else { lobe::EMISSION };
+        let emits = if self.le.is_black() {
+            0
+        } else {
+            lobe::EMISSION
+        };
         lobe::DIFFUSE | lobe::REFLECTION | emits
     }
 
     fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
         // Reflection only: both directions on the same side of the surface.
         if same_side(g, wo, wi) {
-            self.f
+            self.f(g)
         } else {
             Color::BLACK
         }
@@ -63,10 +76,17 @@ impl Shader for Lambert {
         if lobes & lobe::DIFFUSE == 0 || lobes & lobe::REFLECTION == 0 {
             return None;
         }
-        cosine_lobe_sample(g, wo, u, lobe::DIFFUSE | lobe::REFLECTION, |_| self.f)
+        cosine_lobe_sample(g, wo, u, lobe::DIFFUSE | lobe::REFLECTION, |_| self.f(g))
     }
 
-    fn pdf(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3, lobes: u32) -> Option<f32> {
+    fn pdf(
+        &self,
+        _ctx: &mut TraceCtx,
+        g: &LocalGeom,
+        wo: Vec3,
+        wi: Vec3,
+        lobes: u32,
+    ) -> Option<f32> {
         let ours = lobe::DIFFUSE | lobe::REFLECTION;
         Some(if lobes & ours == ours {
             cosine_pdf(g, wo, wi)

@@ -69,7 +69,9 @@ impl Integrator for Whitted {
         // What the surface emits, plus direct light through the material's
         // BRDF, one shadow ray a light (area lights included)...
         let mut l = m.emitted(ctx, &g, wo);
-        l = l.plus(direct_light(ctx, scene, ray, &g, |ctx, wi| m.eval(ctx, &g, wo, wi)));
+        l = l.plus(direct_light(ctx, scene, ray, &g, |ctx, wi| {
+            m.eval(ctx, &g, wo, wi)
+        }));
         // ...plus the mirror and refraction rays of its delta lobes.
         for (lobes, kind) in SPECULAR_LOBES {
             if m.lobes() & lobes != lobes {

@@ -117,9 +117,7 @@ impl Builder<'_> {
             // Below the first transform, objects are made unshifted and the
             // transform absorbed the shift (objects.rs).
             let to_world = match m {
-                Some(m) => {
-                    DAffine3::from_translation(-glam::DVec3::from(desc.render.origin)) * m
-                }
+                Some(m) => DAffine3::from_translation(-glam::DVec3::from(desc.render.origin)) * m,
                 None => DAffine3::IDENTITY,
             };
             let l = to_world.matrix3;

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 /// Largest image, in pixels (the f64 film takes 24 bytes a pixel).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
-const KEYS: [&str; 10] = [
+const KEYS: [&str; 11] = [
     "width",
     "height",
     "spp",
@@ -22,6 +22,7 @@ const KEYS: [&str; 10] = [
     "background",
     "output",
     "origin",
+    "filter",
 ];
 const OBJ: &str = "render";
 
@@ -52,6 +53,53 @@ pub struct Render {
     /// the camera's `eye`, so that what the camera sees has the precision
     /// of a scene at the origin (docs/numerics.md X3).
     pub origin: [f64; 3],
+    /// The pixel filter, or `None` (not given): one sample looks through
+    /// the pixel centre, more are spread uniformly over the pixel (a box).
+    pub filter: Option<Filter>,
+}
+
+/// A pixel filter, importance-sampled: each sample's film position is drawn
+/// from the filter's own distribution and weighs 1, so a pixel is the plain
+/// mean of its samples, and images do not depend on threads or tiles.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Filter {
+    /// Uniform over the pixel (radius 0.5): Mitsuba's `box`, the Cornell
+    /// reference's convention.
+    Box,
+    /// A tent of radius 1 pixel.
+    Tent,
+    /// A Gaussian of standard deviation 0.5 pixel, cut at 3σ (1.5 pixels).
+    Gaussian,
+}
+
+impl Filter {
+    /// The filter's name in the scene format.
+    pub fn name(self) -> &'static str {
+        match self {
+            Filter::Box => "box",
+            Filter::Tent => "tent",
+            Filter::Gaussian => "gaussian",
+        }
+    }
+}
+
+/// `filter = "box" | "tent" | "gaussian"`.
+fn filter(r: &Node) -> Result<Option<Filter>, SceneError> {
+    let Some(n) = r.get("filter") else {
+        return Ok(None);
+    };
+    let name = string(n, OBJ, "filter")?;
+    match name.as_str() {
+        "box" => Ok(Some(Filter::Box)),
+        "tent" => Ok(Some(Filter::Tent)),
+        "gaussian" => Ok(Some(Filter::Gaussian)),
+        other => Err(SceneError::invalid(
+            &n.origin,
+            OBJ,
+            "filter",
+            format!("unknown pixel filter `{other}`: use \"box\", \"tent\" or \"gaussian\""),
+        )),
+    }
 }
 
 impl Render {
@@ -106,6 +154,7 @@ impl Render {
                 .map(|n| string(n, OBJ, "output"))
                 .transpose()?,
             origin,
+            filter: filter(r)?,
         })
     }
 }
