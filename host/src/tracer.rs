@@ -6,6 +6,7 @@
 use rtk_kernel::abi::*;
 use rtk_kernel::glam::{Mat3, Vec3};
 use rtk_kernel::host::{SceneRecord, Services, ServicesTable, Shader};
+use rtk_kernel::sdk::shading::{pick_from_cdf, uniform_triangle};
 use rtk_shell::World;
 
 /// The world as the render loop and the plugins see it.
@@ -74,9 +75,21 @@ impl<'w> Tracer<'w> {
         u: [f32; 2],
     ) -> Option<LightSample> {
         let (e, a) = (&self.world.emitters[i], &self.area[i]);
-        let s = e.object.sample_surface(ctx, &u)?;
-        let q = a.m * s.p.v() + a.t;
-        let n = (a.n * s.n.v()).normalize_or_zero();
+        let (q, n, pdf_area) = match &e.mesh {
+            // A mesh: placed triangles, uniform by world area.
+            Some(m) => {
+                let (k, u0) = pick_from_cdf(&m.cdf, u[0])?;
+                let [v0, e1, e2, n] = m.tris[k].map(Vec3::from);
+                let b = uniform_triangle([u0, u[1]]);
+                (v0 + b[1] * e1 + b[2] * e2, n, (1.0 / m.area) as f32)
+            }
+            // Anything else: its own sampling, carried through the transform.
+            None => {
+                let s = e.object.sample_surface(ctx, &u)?;
+                let n = (a.n * s.n.v()).normalize_or_zero();
+                (a.m * s.p.v() + a.t, n, a.area_pdf(s.area, n))
+            }
+        };
         let d = q - p;
         let dist2 = d.length_squared();
         let dist = dist2.sqrt();
@@ -99,7 +112,7 @@ impl<'w> Tracer<'w> {
         if li.is_black() {
             return None;
         }
-        let pdf = a.area_pdf(s.area, n) * dist2 / cos;
+        let pdf = pdf_area * dist2 / cos;
         (pdf.is_finite() && pdf > 0.0).then_some(LightSample {
             wi: wi.into(),
             dist,
@@ -204,7 +217,7 @@ impl Services for Tracer<'_> {
             return 0.0;
         };
         let _ = ctx;
-        let area = self.world.emitters[e as usize].area;
+        let em = &self.world.emitters[e as usize];
         let n = g.ng.v();
         let d = g.p.v() - p;
         let dist2 = d.length_squared();
@@ -212,7 +225,11 @@ impl Services for Tracer<'_> {
         if !(cos > 0.0) {
             return 0.0;
         }
-        a.area_pdf(area, n) * dist2 / cos
+        let pdf_area = match &em.mesh {
+            Some(m) => (1.0 / m.area) as f32,
+            None => a.area_pdf(em.area, n),
+        };
+        pdf_area * dist2 / cos
     }
 
     fn sample_light(

@@ -15,13 +15,26 @@ pub fn offset_ray_origin(p: Vec3, p_err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     }
     let mut po = p + offset;
     for i in 0..3 {
-        if offset[i] > 0.0 {
-            po[i] = po[i].next_up();
-        } else if offset[i] < 0.0 {
-            po[i] = po[i].next_down();
+        if offset[i] != 0.0 {
+            po[i] = ulp_away(po[i], offset[i] > 0.0);
         }
     }
     po
+}
+
+/// `x` moved one float towards +∞ (`up`) or −∞: `next_up`/`next_down` for
+/// the finite values a hit point has (positions are validated, rule 1),
+/// without their NaN and infinity branches (this runs for every spawned
+/// ray). At ±0 it steps to the smallest subnormal of the right sign.
+#[inline]
+fn ulp_away(x: f32, up: bool) -> f32 {
+    if x == 0.0 {
+        let tiny = f32::from_bits(1);
+        return if up { tiny } else { -tiny };
+    }
+    let b = x.to_bits();
+    // Away from zero grows the magnitude's bits; towards zero shrinks them.
+    f32::from_bits(if (x > 0.0) == up { b + 1 } else { b - 1 })
 }
 
 /// A ray leaving the surface at `g` in direction `dir`, one generation deeper.
@@ -77,6 +90,26 @@ pub fn spawn_ray_between(from: &LocalGeom, to: &LocalGeom, parent: &Ray) -> Ray 
         t_max: 1.0 - SHADOW_EPSILON,
         time: parent.time,
         generation: parent.generation + 1,
+    }
+}
+
+#[cfg(test)]
+mod ulp_tests {
+    use super::ulp_away;
+
+    #[test]
+    fn ulp_away_matches_next_up_and_next_down() {
+        let xs = [
+            0.0f32, -0.0, 1.0, -1.0, 1e-45, -1e-45, 3.0e38, -3.0e38, 559.2, 1e-38,
+        ];
+        for x in xs {
+            assert_eq!(ulp_away(x, true).to_bits(), x.next_up().to_bits(), "{x} up");
+            assert_eq!(
+                ulp_away(x, false).to_bits(),
+                x.next_down().to_bits(),
+                "{x} down"
+            );
+        }
     }
 }
 

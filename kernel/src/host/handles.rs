@@ -222,6 +222,48 @@ impl Object {
         unsafe { (self.inner.class.local_geom())(self.inner.this, ctx, ray, hit, 0, mask, out) }
     }
 
+    /// A copy of the triangles the object lends as data (positions, index
+    /// triples; `None` when its class lends none), checked: every index is
+    /// within the positions.
+    pub fn triangles(&self) -> Result<Option<(Vec<[f32; 3]>, Vec<[u32; 3]>)>, CallError> {
+        let Some(f) = self.inner.class.triangles() else {
+            return Ok(None);
+        };
+        let mut d = std::mem::MaybeUninit::<TriangleData>::uninit();
+        let mut c = Collected::default();
+        // SAFETY: the object is live and prepared; `d` outlives the call.
+        let st = unsafe { f(self.inner.this, d.as_mut_ptr(), c.sink()) };
+        c.result(st, "triangles")?;
+        // SAFETY: the entry succeeded, so it wrote `d`: pointers into the
+        // object's immutable data with their counts (the SDK checked the
+        // indices), valid while the object lives; copied before returning.
+        let (p, t) = unsafe {
+            let d = d.assume_init();
+            let slice = |ptr: *const [f32; 3], n: u32| {
+                if n == 0 || ptr.is_null() {
+                    Vec::new()
+                } else {
+                    std::slice::from_raw_parts(ptr, n as usize).to_vec()
+                }
+            };
+            let tris = if d.triangle_count == 0 || d.indices.is_null() {
+                Vec::new()
+            } else {
+                std::slice::from_raw_parts(d.indices, d.triangle_count as usize).to_vec()
+            };
+            (slice(d.positions, d.vertex_count), tris)
+        };
+        if t.iter().flatten().any(|&i| i as usize >= p.len()) {
+            return Err(CallError {
+                entry: "triangles",
+                key: String::new(),
+                message: "a triangle index is beyond the vertices".into(),
+                panicked: false,
+            });
+        }
+        Ok(Some((p, t)))
+    }
+
     /// Whether the class can sample its surface (be an area light).
     pub fn samples_surface(&self) -> bool {
         self.inner.class.sample_surface().is_some()

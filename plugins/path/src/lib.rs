@@ -83,7 +83,9 @@ fn max_component(c: Color) -> f32 {
 
 impl Path {
     /// One light sample at the vertex `g`: the light's contribution, MIS
-    /// weighted against the BSDF's density, divided by the choice of light.
+    /// weighted against the BSDF's density, divided by the choice of light;
+    /// and whether the material reports its density, when that was asked
+    /// (the BSDF sample then needs no second call to find out).
     #[allow(clippy::too_many_arguments)]
     fn next_event(
         &self,
@@ -94,38 +96,39 @@ impl Path {
         m: &Material,
         wo: Vec3,
         n_lights: u32,
-    ) -> Color {
+    ) -> (Color, Option<bool>) {
+        let none = (Color::BLACK, None);
         let i = ((ctx.rng.next_f32() * n_lights as f32) as u32).min(n_lights - 1);
         let u = [ctx.rng.next_f32(), ctx.rng.next_f32()];
         let Some(ls) = scene.sample_light(ctx, i, g.p.v(), u, ray.time) else {
-            return Color::BLACK;
+            return none;
         };
         if !(ls.pdf > 0.0) || ls.li.is_black() {
-            return Color::BLACK;
+            return none;
         }
         let wi = ls.wi.v();
         let cos = g.ns.v().dot(wi).abs();
         let f = m.eval(ctx, g, wo, wi);
         if f.is_black() || !(cos > 0.0) {
-            return Color::BLACK;
+            return none;
         }
+        let pl = ls.pdf / n_lights as f32;
+        let (w, known) = if scene.light_flags(i) & light_flag::DELTA != 0 {
+            (1.0, None)
+        } else {
+            match m.pdf(ctx, g, wo, wi, lobe::ALL) {
+                Some(pb) => (power(pl, pb), Some(true)),
+                None => (1.0, Some(false)),
+            }
+        };
         let mut shadow = spawn_ray(g, wi, ray);
         if ls.dist.is_finite() {
             shadow.t_max = ls.dist * (1.0 - SHADOW_EPSILON);
         }
         if scene.occluded(ctx, &shadow) {
-            return Color::BLACK;
+            return (Color::BLACK, known);
         }
-        let pl = ls.pdf / n_lights as f32;
-        let w = if scene.light_flags(i) & light_flag::DELTA != 0 {
-            1.0
-        } else {
-            match m.pdf(ctx, g, wo, wi, lobe::ALL) {
-                Some(pb) => power(pl, pb),
-                None => 1.0,
-            }
-        };
-        f.times(ls.li).scale(cos * w / pl)
+        (f.times(ls.li).scale(cos * w / pl), known)
     }
 
     /// Weight of light found along `ray` (at `geom`, or leaving the scene).
@@ -192,9 +195,11 @@ impl Integrator for Path {
             if segments >= self.max_depth {
                 break;
             }
+            let mut pdf_known = None;
             if m.lobes() & (lobe::DIFFUSE | lobe::GLOSSY) != 0 && n_lights > 0 {
-                let d = self.next_event(ctx, scene, &ray, &g, &m, wo, n_lights);
+                let (d, known) = self.next_event(ctx, scene, &ray, &g, &m, wo, n_lights);
                 l = l.plus(beta.times(d));
+                pdf_known = known;
             }
             let u = [ctx.rng.next_f32(), ctx.rng.next_f32()];
             let Some(bs) = m.sample(ctx, &g, wo, u, lobe::ALL) else {
@@ -208,9 +213,21 @@ impl Integrator for Path {
             found = if bs.lobe & lobe::SPECULAR != 0 {
                 Found::Unweighted
             } else {
-                match m.pdf(ctx, &g, wo, wi, lobe::ALL) {
-                    Some(pdf) => Found::Weighed { p: g.p.v(), pdf },
-                    None => Found::NextEventOnly,
+                // `sample`'s density is the one MIS needs (that of all the
+                // lobes it may choose); ask `pdf` only to learn whether the
+                // material reports densities at all, if the light sample
+                // did not already.
+                let known = match pdf_known {
+                    Some(k) => k,
+                    None => m.pdf(ctx, &g, wo, wi, lobe::ALL).is_some(),
+                };
+                if known {
+                    Found::Weighed {
+                        p: g.p.v(),
+                        pdf: bs.pdf,
+                    }
+                } else {
+                    Found::NextEventOnly
                 }
             };
             // Russian roulette after `rr_depth` scattering events (Mitsuba's

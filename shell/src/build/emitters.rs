@@ -34,6 +34,50 @@ pub struct Emitter {
     pub shader: u32,
     /// Instance path, for messages.
     pub path: String,
+    /// For an object that lends its triangles (a mesh): the triangles in
+    /// the renderer's space, so light samples are drawn uniformly by world
+    /// area with no call into the plugin and no transform per sample.
+    pub mesh: Option<EmitterMesh>,
+}
+
+/// An emitting mesh's triangles, placed: sampled by world area.
+pub struct EmitterMesh {
+    /// Per triangle: first vertex, the two edges from it, the unit normal
+    /// (the side `local_geom`'s `ng` faces, through the transform).
+    pub tris: Vec<[[f32; 3]; 4]>,
+    /// Running sum of the triangles' world areas.
+    pub cdf: Vec<f64>,
+    /// Total world area.
+    pub area: f64,
+}
+
+impl EmitterMesh {
+    /// Place `positions`/`indices` by `m`, in f64, rounding once.
+    fn new(m: DAffine3, positions: &[[f32; 3]], indices: &[[u32; 3]]) -> Option<EmitterMesh> {
+        let flip = m.matrix3.determinant() < 0.0;
+        let mut tris = Vec::with_capacity(indices.len());
+        let mut cdf = Vec::with_capacity(indices.len());
+        let mut sum = 0.0f64;
+        for t in indices {
+            let v = t.map(|i| {
+                m.transform_point3(glam::DVec3::from(positions[i as usize].map(f64::from)))
+            });
+            let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+            let c = e1.cross(e2);
+            let a = 0.5 * c.length();
+            // The normal as the mesh computes it, carried through M: the
+            // cross product of the placed edges, flipped by a mirroring M.
+            let n = if flip { -c } else { c }.normalize_or_zero();
+            sum += a;
+            cdf.push(sum);
+            tris.push([v[0], e1, e2, n].map(|x| x.as_vec3().to_array()));
+        }
+        (sum > 0.0 && sum.is_finite()).then_some(EmitterMesh {
+            tris,
+            cdf,
+            area: sum,
+        })
+    }
 }
 
 impl Builder<'_> {
@@ -121,6 +165,10 @@ impl Builder<'_> {
                 None => DAffine3::IDENTITY,
             };
             let l = to_world.matrix3;
+            let mesh = match object.triangles() {
+                Ok(Some((p, t))) => EmitterMesh::new(to_world, &p, &t),
+                _ => None,
+            };
             out.push(Emitter {
                 object,
                 to_world,
@@ -129,6 +177,7 @@ impl Builder<'_> {
                 area,
                 shader: data.shader,
                 path: inst.path.clone(),
+                mesh,
             });
         }
         if od.def.class == rtk_kernel::classes::INSTANCE_TRANSFORM {

@@ -14,7 +14,7 @@ mod objects;
 mod prepare;
 mod reach;
 
-pub use emitters::Emitter;
+pub use emitters::{Emitter, EmitterMesh};
 pub use prepare::{Parallel, Sequential};
 
 use crate::desc::{Def, Desc};
