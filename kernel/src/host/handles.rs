@@ -170,6 +170,9 @@ impl ObjectBuilder {
     }
 }
 
+/// A copy of an object's triangles: vertex positions and index triples.
+pub type OwnedTriangles = (Vec<[f32; 3]>, Vec<[u32; 3]>);
+
 impl Object {
     fn raw(&self) -> ObjectRef {
         ObjectRef {
@@ -225,7 +228,7 @@ impl Object {
     /// A copy of the triangles the object lends as data (positions, index
     /// triples; `None` when its class lends none), checked: every index is
     /// within the positions.
-    pub fn triangles(&self) -> Result<Option<(Vec<[f32; 3]>, Vec<[u32; 3]>)>, CallError> {
+    pub fn triangles(&self) -> Result<Option<OwnedTriangles>, CallError> {
         let Some(f) = self.inner.class.triangles() else {
             return Ok(None);
         };

@@ -35,6 +35,7 @@
 //!   `occluded` answers any-hit shadow queries, and `local_geom` computes the
 //!   expensive surface record only for the hit that is shaded.
 
+pub mod camera;
 mod child;
 pub mod params;
 mod scene;

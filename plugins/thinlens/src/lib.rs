@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::glam::{DVec3, Vec3};
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::sdk::camera::ViewFrame;
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::f32::consts::FRAC_PI_4;
@@ -55,30 +56,8 @@ impl Plugin for ThinLens {
     type Params = Params;
 
     fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
-        let eye = env.position("eye", p.eye)?;
-        env.position("look_at", p.look_at)?;
-        // The view direction from the unrounded points: far from the
-        // origin their f32 roundings would tilt it.
-        let look = DVec3::from(p.look_at) - DVec3::from(p.eye);
-        let up = params::point("up", p.up)?;
-        if !(p.fov_y > 0.0 && p.fov_y < 180.0) {
-            return Err(PluginError::key(
-                "fov_y",
-                format!("must be between 0 and 180 degrees, got {}", p.fov_y),
-            ));
-        }
-        let forward = look.normalize_or_zero().as_vec3();
-        if forward == Vec3::ZERO {
-            return Err(PluginError::key("look_at", "must differ from eye"));
-        }
-        let right = forward.cross(up).normalize_or_zero();
-        if right == Vec3::ZERO {
-            return Err(PluginError::key(
-                "up",
-                "must not be parallel to the view direction",
-            ));
-        }
-        let up = right.cross(forward);
+        let f = ViewFrame::new(env, p.eye, p.look_at, p.up, p.fov_y)?;
+        let (eye, forward, right, up) = (f.eye, f.forward, f.right, f.up);
         if !(p.aperture_radius >= 0.0 && p.aperture_radius.is_finite()) {
             return Err(PluginError::key(
                 "aperture_radius",
@@ -93,10 +72,9 @@ impl Plugin for ThinLens {
                 ));
             }
             Some(f) => f,
-            None => look.length(),
+            None => f.look_distance,
         };
-        let tan_half = (p.fov_y.to_radians() * 0.5).tan();
-        let aspect = env.image_width.max(1) as f32 / env.image_height.max(1) as f32;
+        let (tan_half, aspect) = (f.tan_half, f.aspect);
         let r = p.aperture_radius;
         let inv_focus = (1.0 / focus) as f32;
         Ok(ThinLens {
