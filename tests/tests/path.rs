@@ -239,3 +239,78 @@ fn cornell_box_converges_to_mitsuba() {
         );
     }
 }
+
+/// The brief's I1: a convex Lambertian sphere of albedo ρ under a constant
+/// environment L reflects exactly ρL (it cannot see itself), and with
+/// ρ = 1 it disappears. Pixels wholly inside the silhouette are
+/// independent estimates of ρL: their mean must lie within 5 standard
+/// errors; rays that miss see exactly L.
+#[test]
+fn convex_lambertian_under_a_constant_environment_reflects_albedo_times_l() {
+    for albedo in [0.5f64, 1.0] {
+        let scene = format!(
+            r#"
+[render]
+width = 32
+height = 32
+spp = 32
+filter = "box"
+root = "world"
+integrator = {{ class = "path" }}
+[cameras.c]
+class = "pinhole"
+eye = [0.0, 0.0, 4.0]
+fov_y = 40.0
+[lights.sky]
+class = "constant"
+radiance = [1.0, 1.0, 1.0]
+[shaders.s]
+class = "lambert"
+albedo = [{albedo}, {albedo}, {albedo}]
+[objects.ball]
+class = "sphere"
+[objects.world]
+class = "list"
+children = [{{ object = "ball", shader = "s" }}]
+"#
+        );
+        let (run, img) = render_scene(&scene, &[]);
+        assert!(run.ok, "{}", run.stderr);
+        let img = img.unwrap();
+        let t = 20f64.to_radians().tan();
+        let (mut inside, mut outside) = (Vec::new(), 0);
+        for y in 0..32 {
+            for x in 0..32 {
+                // The pixel's corners' rays: all within 0.9 of the centre
+                // line, or all beyond 1.1 (the sphere's radius is 1).
+                let dist = |fx: f64, fy: f64| {
+                    let (sx, sy) = ((2.0 * fx / 32.0 - 1.0) * t, (1.0 - 2.0 * fy / 32.0) * t);
+                    4.0 * (sx * sx + sy * sy).sqrt() / (1.0 + sx * sx + sy * sy).sqrt()
+                };
+                let (x, y) = (x as f64, y as f64);
+                let d = [
+                    dist(x, y),
+                    dist(x + 1.0, y),
+                    dist(x, y + 1.0),
+                    dist(x + 1.0, y + 1.0),
+                ];
+                let p = img.px(x as u32, y as u32);
+                if d.iter().all(|&d| d < 0.9) {
+                    inside.push(p[0] as f64);
+                } else if d.iter().all(|&d| d > 1.1) {
+                    assert_eq!(p, [1.0; 3], "background pixel ({x},{y})");
+                    outside += 1;
+                }
+            }
+        }
+        let n = inside.len() as f64;
+        let mean = inside.iter().sum::<f64>() / n;
+        let var = inside.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let tol = 5.0 * (var / n).sqrt() + 1e-6;
+        assert!(n > 100.0 && outside > 100, "{n} {outside}");
+        assert!(
+            (mean - albedo).abs() < tol,
+            "albedo {albedo}: mean {mean} (± {tol})"
+        );
+    }
+}
