@@ -2,6 +2,7 @@
 //! cameras and lights.
 
 mod analytic;
+mod checkpoint;
 mod converge;
 mod images;
 mod output;
@@ -60,6 +61,21 @@ enum Command {
         /// Print only class, kind and file, not each plugin's documentation.
         #[arg(long)]
         short: bool,
+        /// Load every plugin library on the path (shadowed ones too) and print
+        /// one line per library: `ok` (class, kind, version) or `broken` with
+        /// the loader's reason. Exits non-zero if any is broken.
+        #[arg(long)]
+        check: bool,
+    },
+    /// Stitch crop films (`rtk render --crop ... -o PART.rtkfilm`) into the
+    /// full image, bit for bit what a single render gives.
+    Merge {
+        /// The full image: .png, .exr, or .rtkfilm.
+        out: PathBuf,
+        /// The crop films (.rtkfilm), complete, of one scene and settings,
+        /// together covering the image without overlap.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
     },
 }
 
@@ -94,6 +110,31 @@ struct RenderArgs {
     /// directory, and its output may not be an absolute path.
     #[arg(long)]
     safe: bool,
+    /// Render only the pixels [x0, x1) x [y0, y1) of the full image (the
+    /// camera still sees the full image); the output is the crop's size.
+    /// With `-o PART.rtkfilm`, crops are stitched by `rtk merge`.
+    #[arg(long, value_name = "X0,Y0,X1,Y1")]
+    crop: Option<String>,
+    /// Save the film (f64 sums, per-pixel sample counts, the scene's hash and
+    /// settings) to FILE atomically between sample passes, every
+    /// --checkpoint-every seconds, and when the render stops.
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints (default 60; 0: after every pass).
+    #[arg(
+        long = "checkpoint-every",
+        value_name = "SECS",
+        requires = "checkpoint"
+    )]
+    checkpoint_every: Option<f64>,
+    /// Continue the render saved in FILE (a checkpoint of the same scene,
+    /// settings and crop): the image is bit-identical to an uninterrupted run.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
+    /// Render in passes of one sample per pixel and stop after the pass
+    /// during which SECS seconds of rendering have passed (or at spp).
+    #[arg(long = "time-limit", value_name = "SECS")]
+    time_limit: Option<f64>,
 }
 
 fn main() {
@@ -107,7 +148,18 @@ fn main() {
             pool(a.threads).and_then(|(pool, threads)| converge::run(a, &pool, threads))
         }
         Command::Diff { a, b } => cmd_diff(&a, &b),
-        Command::Plugins { plugin_path, short } => cmd_plugins(&plugin_path, short),
+        Command::Plugins {
+            plugin_path,
+            short,
+            check,
+        } => {
+            if check {
+                cmd_plugins_check(&plugin_path)
+            } else {
+                cmd_plugins(&plugin_path, short)
+            }
+        }
+        Command::Merge { out, parts } => checkpoint::merge(&out, &parts),
     };
     if let Err(e) = res {
         eprintln!("error: {}", printable(&format!("{e:#}")));
@@ -162,12 +214,44 @@ fn cmd_trace(a: trace::TraceArgs) -> Result<()> {
     trace::run(a, &pool, &Pool(&pool))
 }
 
+/// Set by the Ctrl-C (SIGINT) handler; the render loop polls it.
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Exit status of a render stopped by Ctrl-C (128 + SIGINT, as shells report it).
+const EXIT_INTERRUPTED: i32 = 130;
+
+/// A non-negative, finite number of seconds from `flag`.
+fn seconds(flag: &str, v: Option<f64>) -> Result<Option<std::time::Duration>> {
+    match v {
+        None => Ok(None),
+        Some(s) if (0.0..1e9).contains(&s) => Ok(Some(std::time::Duration::from_secs_f64(s))),
+        Some(s) => bail!("{flag} {s}: expected a number of seconds, at least 0"),
+    }
+}
+
+/// Stop the render at the next sample on the first Ctrl-C; quit at once
+/// (nothing written) on the second.
+fn install_interrupt_handler() {
+    use std::sync::atomic::Ordering;
+    let res = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(EXIT_INTERRUPTED);
+        }
+    });
+    if let Err(e) = res {
+        eprintln!("warning: Ctrl-C will not save the image: {e}");
+    }
+}
+
 fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     let (pool, threads) = pool(a.threads)?;
     let mut sets = a.set.clone();
     if let Some(spp) = a.spp {
         sets.push(format!("render.spp={spp}"));
     }
+    let time_limit = seconds("--time-limit", a.time_limit)?;
+    let every = seconds("--checkpoint-every", a.checkpoint_every)?
+        .unwrap_or(std::time::Duration::from_secs(60));
 
     let t_parse = Instant::now();
     let (file, desc) = read_scene(&a.scene, &sets, a.safe)?;
@@ -175,16 +259,77 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
 
     let out = output_path(&a, desc.render.output.as_deref());
     output::check_writable(&out)?;
-    let film = new_film(&desc, &a.scene)?;
+    if let Some(c) = &a.checkpoint {
+        output::check_can_create(c, "checkpoint")?;
+    }
+    let header = checkpoint::Header::new(&file.text.src, &sets, &desc.render);
+    let (w, h) = (desc.render.width, desc.render.height);
+    let rect = match &a.crop {
+        Some(c) => checkpoint::parse_crop(c, w, h)?,
+        None => render::Rect::full(w, h),
+    };
+    let mut accum = match &a.resume {
+        Some(r) => {
+            let (got, accum) = checkpoint::read(r)?;
+            got.check_matches(&header, r, &a.scene)?;
+            if accum.rect != rect {
+                bail!(
+                    "{} holds the pixels {} of the image, this render asks for {rect} (--crop must be the same)",
+                    r.display(),
+                    accum.rect
+                );
+            }
+            accum
+        }
+        None => render::Accum::new(w, h, rect)
+            .map_err(|m| anyhow::anyhow!("{}: {m}", a.scene.display()))?,
+    };
 
     let world = build_world(&file, desc, &a.plugin_path, &pool)?;
+    let spp = world.desc.render.spp;
 
     let tracer = tracer::Tracer::new(&world);
+    install_interrupt_handler();
     let t_render = Instant::now();
-    let film = render_film(&tracer, &pool, !a.quiet, film, &a.scene)?;
+    let mut last_checkpoint = Instant::now();
+    let mut save = |acc: &render::Accum| -> Result<(), String> {
+        if let Some(c) = &a.checkpoint {
+            if last_checkpoint.elapsed() >= every {
+                checkpoint::write(c, &header, acc).map_err(|e| format!("{e:#}"))?;
+                last_checkpoint = Instant::now();
+            }
+        }
+        Ok(())
+    };
+    let mut ctl = render::Control {
+        progress: !a.quiet,
+        // --time-limit: one sample per pixel a pass, so the render stops
+        // close to the limit; otherwise spp/16, at most 16, so Ctrl-C soon
+        // leaves every pixel an estimate. The image is the same either way.
+        pass_spp: if time_limit.is_some() {
+            1
+        } else {
+            spp.div_ceil(16).clamp(1, 16)
+        },
+        stop: Some(&INTERRUPTED),
+        deadline: time_limit.map(|d| t_render + d),
+        after_pass: &mut save,
+    };
+    let end = render::render_passes(&tracer, &pool, &mut ctl, &mut accum)
+        .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", a.scene.display()))?;
     let render_time = t_render.elapsed();
     let t_write = Instant::now();
-    output::write(&film, &out)?;
+    if let Some(c) = &a.checkpoint {
+        checkpoint::write(c, &header, &accum)?;
+    }
+    let (min, max) = accum.sample_range();
+    if checkpoint::is_film_path(&out) {
+        checkpoint::write(&out, &header, &accum)?;
+    }
+    let film = accum.into_film();
+    if !checkpoint::is_film_path(&out) {
+        output::write(&film, &out)?;
+    }
     let times = StepTimes {
         parse: parse_time,
         render: render_time,
@@ -193,7 +338,8 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     };
 
     if a.stats {
-        let json = stats_json(&a, &out, &world, &film, threads, &times);
+        let mut json = stats_json(&a, &out, &world, &film, threads, &times);
+        json["samples_per_pixel"] = serde_json::json!([min, max]);
         // A closed pipe (`| head`) is not an error worth a panic.
         use std::io::Write;
         let _ = writeln!(
@@ -202,15 +348,39 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
             serde_json::to_string_pretty(&json)?
         );
     }
-    if !a.quiet {
-        eprintln!(
-            "wrote {} ({}x{}, {} spp) in {:.2} s",
+    let counts = if min == max {
+        format!("{min} of {spp} samples per pixel")
+    } else {
+        format!("{min} to {max} of {spp} samples per pixel")
+    };
+    match end {
+        render::End::Interrupted => {
+            eprintln!(
+                "interrupted: wrote {} ({}x{}, {counts}){}",
+                out.display(),
+                film.width,
+                film.height,
+                a.checkpoint
+                    .as_ref()
+                    .map(|c| format!("; continue with --resume {}", c.display()))
+                    .unwrap_or_default()
+            );
+            std::process::exit(EXIT_INTERRUPTED);
+        }
+        render::End::TimeUp => eprintln!(
+            "time limit: wrote {} ({}x{}, {counts})",
+            out.display(),
+            film.width,
+            film.height
+        ),
+        render::End::Complete if !a.quiet => eprintln!(
+            "wrote {} ({}x{}, {spp} spp) in {:.2} s",
             out.display(),
             film.width,
             film.height,
-            world.desc.render.spp,
             start.elapsed().as_secs_f64()
-        );
+        ),
+        render::End::Complete => {}
     }
     Ok(())
 }
@@ -416,6 +586,57 @@ fn cmd_plugins(extra: &[PathBuf], short: bool) -> Result<()> {
             }
             Err(e) => println!("\n{class}  [refused]  {e}"),
         }
+    }
+    Ok(())
+}
+
+/// `rtk plugins --check`: load every plugin library on the path, one line each.
+fn cmd_plugins_check(extra: &[PathBuf]) -> Result<()> {
+    let path = PluginPath::standard(extra);
+    let libs = path.libraries();
+    let mut seen = std::collections::BTreeMap::<String, PathBuf>::new();
+    let mut broken = 0;
+    for (file, class) in &libs {
+        let Some(class) = class else {
+            broken += 1;
+            println!(
+                "broken  {}: the file name must be {} with a class name made of letters, digits and _",
+                file.display(),
+                rtk_shell::plugins::library_file_name("<class>")
+            );
+            continue;
+        };
+        let shadow = match seen.get(class) {
+            Some(first) => format!("  (shadowed by {}: not used)", first.display()),
+            None => {
+                seen.insert(class.clone(), file.clone());
+                String::new()
+            }
+        };
+        match rtk_shell::plugins::load(file, Some(class)) {
+            Ok(p) => println!(
+                "ok      {class}  [{}]  v{}  {}{shadow}",
+                p.kind.name(),
+                p.version,
+                file.display()
+            ),
+            Err(e) => {
+                broken += 1;
+                let reason = printable(&e.to_string()).replace('\n', " ");
+                println!("broken  {class}  {}: {reason}{shadow}", file.display());
+            }
+        }
+    }
+    println!(
+        "{} plugin libraries: {} ok, {broken} broken",
+        libs.len(),
+        libs.len() - broken
+    );
+    if broken > 0 {
+        bail!(
+            "{broken} of {} plugin libraries on the plugin path cannot be loaded",
+            libs.len()
+        );
     }
     Ok(())
 }

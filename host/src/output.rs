@@ -13,6 +13,9 @@ pub enum Format {
     Png,
     /// Linear 32-bit float OpenEXR.
     Exr,
+    /// rtk's film file (f64 sums and sample counts: checkpoints and crops,
+    /// `crate::checkpoint`), written by the caller, not by [`write`].
+    Film,
 }
 
 /// The format an output path asks for (checked before rendering).
@@ -25,8 +28,9 @@ pub fn format_of(path: &Path) -> Result<Format> {
     {
         Some("png") => Ok(Format::Png),
         Some("exr") => Ok(Format::Exr),
+        Some(crate::checkpoint::EXTENSION) => Ok(Format::Film),
         _ => bail!(
-            "output {}: the file name must end in .png or .exr",
+            "output {}: the file name must end in .png or .exr (or .rtkfilm, a film file: docs/farm.md)",
             path.display()
         ),
     }
@@ -38,16 +42,22 @@ pub fn format_of(path: &Path) -> Result<Format> {
 /// file system knows about read-only mounts, ACLs and quotas).
 pub fn check_writable(path: &Path) -> Result<()> {
     format_of(path)?;
+    check_can_create(path, "output")
+}
+
+/// Check that the file `path` (`what`: output, checkpoint) can be created:
+/// its folder exists and takes a new file, and it is not a folder.
+pub fn check_can_create(path: &Path, what: &str) -> Result<()> {
     let dir = parent(path);
     if !dir.is_dir() {
         bail!(
-            "output {}: the folder {} does not exist",
+            "{what} {}: the folder {} does not exist",
             path.display(),
             dir.display()
         );
     }
     if path.is_dir() {
-        bail!("output {}: is a folder", path.display());
+        bail!("{what} {}: is a folder", path.display());
     }
     let probe = temp_path(path, "probe");
     match std::fs::OpenOptions::new()
@@ -60,7 +70,7 @@ pub fn check_writable(path: &Path) -> Result<()> {
             Ok(())
         }
         Err(e) => bail!(
-            "output {}: cannot write in the folder {}: {e}",
+            "{what} {}: cannot write in the folder {}: {e}",
             path.display(),
             dir.display()
         ),
@@ -130,6 +140,7 @@ pub fn write(film: &Film, path: &Path) -> Result<()> {
                     .context("image size")?;
                 img.save_with_format(tmp, image::ImageFormat::OpenExr)?;
             }
+            Format::Film => bail!("a film file is written from the render's sums, not an image"),
         }
         Ok(())
     })

@@ -1,6 +1,14 @@
 //! The render loop: tiles over the host's rayon pool, a random stream per
 //! (seed, pixel, sample), an f64 film. The image does not depend on the
 //! thread count or on the order tiles finish.
+//!
+//! The film ([`Accum`]) holds, per pixel, the f64 sum of its samples and
+//! how many there are. A render runs in *passes*: each pass brings every
+//! pixel's count up to the next multiple of the pass size (or to `spp`),
+//! adding each new sample to the pixel's running sum in sample-index order.
+//! Since sample `s` of pixel `p` draws only from `(seed, p, s)`, the sum —
+//! and the final pixel, sum × (1 / spp) — is the same f64 however the work
+//! was split into passes, runs (checkpoint and resume), crops or threads.
 
 use crate::tracer::Tracer;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -8,6 +16,7 @@ use rtk_kernel::abi::*;
 use rtk_shell::desc::render::Filter;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
+use std::time::Instant;
 
 /// Edge of a square tile, in pixels.
 pub const TILE: u32 = 16;
@@ -27,22 +36,29 @@ pub struct Film {
 /// Bytes of film per pixel: linear RGB in f64.
 const FILM_BYTES_PER_PIXEL: u64 = std::mem::size_of::<[f64; 3]>() as u64;
 
+/// Bytes of an [`Accum`] per pixel: the f64 sums and the sample count.
+const ACCUM_BYTES_PER_PIXEL: u64 = FILM_BYTES_PER_PIXEL + 4;
+
+/// A vector of `n` copies of `v`, allocated fallibly.
+fn try_filled<T: Clone>(n: usize, v: T) -> Option<Vec<T>> {
+    let mut out = Vec::new();
+    out.try_reserve_exact(n).ok()?;
+    out.resize(n, v);
+    Some(out)
+}
+
 impl Film {
     /// A black film of `width` x `height`, allocated before the scene is
     /// built and fallibly: an image too large for memory fails with a
-    /// message, where an infallible allocation would abort the process. The
-    /// render writes each tile into it as the tile finishes, so no second
-    /// image-sized buffer exists while rendering.
+    /// message, where an infallible allocation would abort the process.
     pub fn new(width: u32, height: u32) -> Result<Film, String> {
         let n = width as usize * height as usize;
-        let mut pixels = Vec::new();
-        pixels.try_reserve_exact(n).map_err(|_| {
+        let pixels = try_filled(n, [0.0; 3]).ok_or_else(|| {
             format!(
                 "the film of {width}x{height} pixels needs {} MiB ({FILM_BYTES_PER_PIXEL} bytes a pixel), which could not be allocated: render a smaller image",
                 (n as u64 * FILM_BYTES_PER_PIXEL) >> 20
             )
         })?;
-        pixels.resize(n, [0.0; 3]);
         Ok(Film {
             width,
             height,
@@ -50,6 +66,145 @@ impl Film {
             stats: Stats::default(),
         })
     }
+}
+
+/// A pixel rectangle `[x0, x1) x [y0, y1)` of the full image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Rect {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// One past the right column.
+    pub x1: u32,
+    /// One past the bottom row.
+    pub y1: u32,
+}
+
+impl Rect {
+    /// The whole image.
+    pub fn full(width: u32, height: u32) -> Rect {
+        Rect {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+    /// Width.
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+    /// Height.
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+    /// Pixels.
+    pub fn len(&self) -> usize {
+        self.width() as usize * self.height() as usize
+    }
+}
+
+impl std::fmt::Display for Rect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x0, self.y0, self.x1, self.y1)
+    }
+}
+
+/// A film being rendered: per pixel of `rect` (a rectangle of the full
+/// image, all of it unless cropped), the f64 sum of its samples' radiance
+/// and their number. What checkpoints and crop files hold.
+pub struct Accum {
+    /// Width of the full image (what the camera sees).
+    pub full_width: u32,
+    /// Height of the full image.
+    pub full_height: u32,
+    /// The pixels held.
+    pub rect: Rect,
+    /// Per pixel of `rect`, row-major: the sum of its samples.
+    pub sums: Vec<[f64; 3]>,
+    /// Per pixel of `rect`: how many samples the sum holds.
+    pub counts: Vec<u32>,
+    /// Counters summed over threads (of this run only).
+    pub stats: Stats,
+}
+
+impl Accum {
+    /// An empty film for `rect` of a `full_width` x `full_height` image,
+    /// allocated fallibly.
+    pub fn new(full_width: u32, full_height: u32, rect: Rect) -> Result<Accum, String> {
+        let n = rect.len();
+        let fail = || {
+            format!(
+                "the film of {}x{} pixels needs {} MiB ({ACCUM_BYTES_PER_PIXEL} bytes a pixel), which could not be allocated: render a smaller image",
+                rect.width(),
+                rect.height(),
+                (n as u64 * ACCUM_BYTES_PER_PIXEL) >> 20
+            )
+        };
+        let sums = try_filled(n, [0.0; 3]).ok_or_else(fail)?;
+        let counts = try_filled(n, 0u32).ok_or_else(fail)?;
+        Ok(Accum {
+            full_width,
+            full_height,
+            rect,
+            sums,
+            counts,
+            stats: Stats::default(),
+        })
+    }
+
+    /// The fewest and the most samples any pixel has.
+    pub fn sample_range(&self) -> (u32, u32) {
+        let min = self.counts.iter().copied().min().unwrap_or(0);
+        let max = self.counts.iter().copied().max().unwrap_or(0);
+        (min, max)
+    }
+
+    /// The image: each pixel its sum × (1 / count), black without samples.
+    /// Converted in place (no second image-sized buffer).
+    pub fn into_film(self) -> Film {
+        let mut pixels = self.sums;
+        for (p, &c) in pixels.iter_mut().zip(&self.counts) {
+            if c == 0 {
+                *p = [0.0; 3];
+            } else {
+                let inv = 1.0 / c as f64;
+                *p = [p[0] * inv, p[1] * inv, p[2] * inv];
+            }
+        }
+        Film {
+            width: self.rect.width(),
+            height: self.rect.height(),
+            pixels,
+            stats: self.stats,
+        }
+    }
+}
+
+/// How a render ([`render_passes`]) ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum End {
+    /// Every pixel has all its samples.
+    Complete,
+    /// Stopped by the stop flag (Ctrl-C): pixels may have different counts.
+    Interrupted,
+    /// Stopped at the time limit, between passes: every pixel has the same count.
+    TimeUp,
+}
+
+/// What steers a render besides the scene.
+pub struct Control<'a> {
+    /// Show a progress bar (after a second).
+    pub progress: bool,
+    /// Samples per pixel a pass adds (at least 1).
+    pub pass_spp: u32,
+    /// Set (by the Ctrl-C handler) to stop: polled before every sample.
+    pub stop: Option<&'a AtomicBool>,
+    /// Stop after the pass during which this instant passes.
+    pub deadline: Option<Instant>,
+    /// Called after every pass but the last (checkpoints).
+    pub after_pass: &'a mut dyn FnMut(&Accum) -> Result<(), String>,
 }
 
 /// The first plugin failure of the render, and the flag that stops the other
@@ -74,37 +229,61 @@ impl Failure {
     }
 }
 
-/// One finished tile.
-struct Tile {
-    index: u32,
-    pixels: Vec<[f64; 3]>,
-    stats: Stats,
-}
-
 /// What every tile needs to know.
 struct Job<'a, 'w> {
     tracer: &'a Tracer<'w>,
+    /// Full image size (the camera's film).
     width: u32,
     height: u32,
+    /// The pixels rendered.
+    rect: Rect,
     spp: u32,
     seed: u64,
     filter: Option<Filter>,
+    stratified: bool,
     tiles_x: u32,
     threads: u32,
     /// Per thread: the next query id (mailbox ids never repeat on a thread).
     next_query: Vec<AtomicU64>,
     failure: Failure,
+    interrupt: Option<&'a AtomicBool>,
 }
 
-/// Where in the pixel a sample looks, from the pixel's corner: drawn from
-/// the pixel filter's own distribution (so every sample weighs 1). Without
-/// a filter, one sample looks through the centre (a 1-spp image is the
-/// exact pinhole image) and more spread uniformly (a box).
+/// Where in the pixel sample `s` of `spp` looks, from the pixel's corner:
+/// drawn from the pixel filter's own distribution (so every sample weighs
+/// 1). Without a filter, one sample looks through the centre (a 1-spp image
+/// is the exact pinhole image) and more spread uniformly (a box).
+///
+/// Stratified (`sampler = "stratified"`, spp = m²): sample s draws its two
+/// uniform numbers in cell (s mod m, s div m) of an m×m grid instead of the
+/// whole square. Each cell holds exactly one of the pixel's samples, so the
+/// pixel's mean stays an unbiased estimate, and edges (a light's
+/// silhouette) converge faster. Keyed on the sample index and the total
+/// spp, never the pass, so passes, resumes and crops give the same image.
+/// Other spp fall back to independent positions.
 #[inline]
-fn film_offset(filter: Option<Filter>, spp: u32, rng: &mut RngState) -> (f32, f32) {
+fn film_offset(
+    filter: Option<Filter>,
+    s: u32,
+    spp: u32,
+    stratified: bool,
+    rng: &mut RngState,
+) -> (f32, f32) {
+    if filter.is_none() && spp == 1 {
+        return (0.5, 0.5);
+    }
+    let (mut u1, mut u2) = (rng.next_f32(), rng.next_f32());
+    if stratified {
+        let m = (spp as f64).sqrt() as u32;
+        if m * m == spp && m > 1 {
+            let inv = 1.0 / m as f32;
+            // Still below 1 after rounding, so the sample stays in its pixel.
+            u1 = (((s % m) as f32 + u1) * inv).min(1.0 - f32::EPSILON / 2.0);
+            u2 = (((s / m) as f32 + u2) * inv).min(1.0 - f32::EPSILON / 2.0);
+        }
+    }
     match filter {
-        None if spp == 1 => (0.5, 0.5),
-        None | Some(Filter::Box) => (rng.next_f32(), rng.next_f32()),
+        None | Some(Filter::Box) => (u1, u2),
         Some(Filter::Tent) => {
             let tent = |u: f32| {
                 if u < 0.5 {
@@ -113,19 +292,21 @@ fn film_offset(filter: Option<Filter>, spp: u32, rng: &mut RngState) -> (f32, f3
                     1.0 - (2.0 - 2.0 * u).sqrt()
                 }
             };
-            (0.5 + tent(rng.next_f32()), 0.5 + tent(rng.next_f32()))
+            (0.5 + tent(u1), 0.5 + tent(u2))
         }
         Some(Filter::Gaussian) => {
-            // Box–Muller, σ = 0.5 pixel, both coordinates redrawn while
-            // either falls beyond 3σ (0.5 % of draws).
+            // Box–Muller, σ = 0.5 pixel, both coordinates redrawn (from
+            // fresh numbers) while either falls beyond 3σ (0.5 % of draws):
+            // a redraw is an exact truncated sample, so a stratified first
+            // draw stays unbiased.
             for _ in 0..64 {
-                let (u1, u2) = (1.0 - rng.next_f32(), rng.next_f32());
-                let r = 0.5 * (-2.0 * u1.ln()).sqrt();
+                let r = 0.5 * (-2.0 * (1.0 - u1).ln()).sqrt();
                 let a = std::f32::consts::TAU * u2;
                 let (x, y) = (r * a.cos(), r * a.sin());
                 if x.abs() <= 1.5 && y.abs() <= 1.5 {
                     return (0.5 + x, 0.5 + y);
                 }
+                (u1, u2) = (rng.next_f32(), rng.next_f32());
             }
             (0.5, 0.5)
         }
@@ -133,7 +314,7 @@ fn film_offset(filter: Option<Filter>, spp: u32, rng: &mut RngState) -> (f32, f3
 }
 
 /// Render the world's image on the pool's threads into `film` (of the
-/// world's image size, from [`Film::new`]).
+/// world's image size, from [`Film::new`]), in one pass.
 pub fn render(
     tracer: &Tracer,
     pool: &rayon::ThreadPool,
@@ -141,47 +322,117 @@ pub fn render(
     film: Film,
 ) -> Result<Film, String> {
     let r = &tracer.world().desc.render;
+    let rect = Rect::full(film.width, film.height);
+    let counts = try_filled(rect.len(), 0u32)
+        .ok_or_else(|| "the film's sample counts could not be allocated".to_string())?;
+    let mut accum = Accum {
+        full_width: film.width,
+        full_height: film.height,
+        rect,
+        sums: film.pixels,
+        counts,
+        stats: film.stats,
+    };
+    let mut ctl = Control {
+        progress,
+        pass_spp: r.spp.max(1),
+        stop: None,
+        deadline: None,
+        after_pass: &mut |_| Ok(()),
+    };
+    render_passes(tracer, pool, &mut ctl, &mut accum)?;
+    Ok(accum.into_film())
+}
+
+/// Render the world into `accum` (of the world's image size; any
+/// rectangle of it; possibly holding samples already, from a checkpoint)
+/// in passes, until every pixel has the scene's `spp` samples, the stop
+/// flag is set, or the deadline passes.
+pub fn render_passes(
+    tracer: &Tracer,
+    pool: &rayon::ThreadPool,
+    ctl: &mut Control,
+    accum: &mut Accum,
+) -> Result<End, String> {
+    let r = &tracer.world().desc.render;
+    if (accum.full_width, accum.full_height) != (r.width, r.height) {
+        return Err(format!(
+            "the film is of a {}x{} image, the scene's is {}x{}",
+            accum.full_width, accum.full_height, r.width, r.height
+        ));
+    }
     let threads = pool.current_num_threads();
+    let rect = accum.rect;
     let job = Job {
         tracer,
         width: r.width,
         height: r.height,
+        rect,
         spp: r.spp,
         seed: r.seed,
         filter: r.filter,
-        tiles_x: r.width.div_ceil(TILE),
+        stratified: r.stratified,
+        tiles_x: rect.width().div_ceil(TILE),
         threads: threads as u32,
         next_query: (0..threads).map(|_| AtomicU64::new(0)).collect(),
         failure: Failure::default(),
+        interrupt: ctl.stop,
     };
-    let n_tiles = job.tiles_x * r.height.div_ceil(TILE);
-    let total = r.width as u64 * r.height as u64 * r.spp as u64;
-    let bar = progress_bar(total, progress);
-    let (started, drawn) = (std::time::Instant::now(), AtomicBool::new(!progress));
-    let film = Mutex::new(film);
-    pool.install(|| {
-        use rayon::prelude::*;
-        (0..n_tiles).into_par_iter().for_each(|t| {
-            let tile = job.tile(t);
-            let samples = tile.pixels.len() as u64 * job.spp as u64;
-            if let Ok(mut f) = film.lock() {
-                job.place(&mut f, tile);
-            }
-            bar.inc(samples);
-            if !drawn.load(Ordering::Relaxed)
-                && started.elapsed().as_secs_f32() > 1.0
-                && !drawn.swap(true, Ordering::Relaxed)
-            {
-                bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
-            }
-        })
-    });
+    let n_tiles = job.tiles_x * rect.height().div_ceil(TILE);
+    let todo: u64 = accum
+        .counts
+        .iter()
+        .map(|&c| r.spp.saturating_sub(c) as u64)
+        .sum();
+    let bar = progress_bar(todo, ctl.progress);
+    let (started, drawn) = (Instant::now(), AtomicBool::new(!ctl.progress));
+    let pass = ctl.pass_spp.max(1);
+    let end = loop {
+        let (min, _) = accum.sample_range();
+        if min >= r.spp {
+            break End::Complete;
+        }
+        let target = (min / pass)
+            .saturating_add(1)
+            .saturating_mul(pass)
+            .min(r.spp);
+        let shared = Mutex::new(&mut *accum);
+        pool.install(|| {
+            use rayon::prelude::*;
+            (0..n_tiles).into_par_iter().for_each(|t| {
+                if job.stopped() {
+                    return;
+                }
+                let samples = job.tile(&shared, t, target);
+                bar.inc(samples);
+                if !drawn.load(Ordering::Relaxed)
+                    && started.elapsed().as_secs_f32() > 1.0
+                    && !drawn.swap(true, Ordering::Relaxed)
+                {
+                    bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
+                }
+            })
+        });
+        if let Some(msg) = job.failure.first.lock().ok().and_then(|f| f.clone()) {
+            bar.finish_and_clear();
+            return Err(msg);
+        }
+        if job.stopped() {
+            break End::Interrupted;
+        }
+        if target >= r.spp {
+            break End::Complete;
+        }
+        if ctl.deadline.is_some_and(|d| Instant::now() >= d) {
+            break End::TimeUp;
+        }
+        if let Err(e) = (ctl.after_pass)(accum) {
+            bar.finish_and_clear();
+            return Err(e);
+        }
+    };
     bar.finish_and_clear();
-    if let Some(msg) = job.failure.first.lock().ok().and_then(|f| f.clone()) {
-        return Err(msg);
-    }
-    film.into_inner()
-        .map_err(|_| "a render thread failed".to_string())
+    Ok(end)
 }
 
 /// The progress bar: camera samples done, their rate and the time left.
@@ -204,48 +455,91 @@ fn progress_bar(n: u64, shown: bool) -> ProgressBar {
 }
 
 impl Job<'_, '_> {
-    /// The pixel rectangle of tile `t`: (x0, y0, x1, y1).
-    fn rect(&self, t: u32) -> (u32, u32, u32, u32) {
-        let (x0, y0) = ((t % self.tiles_x) * TILE, (t / self.tiles_x) * TILE);
-        (
-            x0,
-            y0,
-            (x0 + TILE).min(self.width),
-            (y0 + TILE).min(self.height),
-        )
+    /// Interrupted (Ctrl-C) or failed.
+    fn stopped(&self) -> bool {
+        self.failure.stop.load(Ordering::Relaxed)
+            || self.interrupt.is_some_and(|s| s.load(Ordering::Relaxed))
     }
 
-    /// Render tile `t` on the calling pool thread.
-    fn tile(&self, t: u32) -> Tile {
+    /// The pixel rectangle of tile `t`, in full-image coordinates.
+    fn tile_rect(&self, t: u32) -> Rect {
+        let x0 = self.rect.x0 + (t % self.tiles_x) * TILE;
+        let y0 = self.rect.y0 + (t / self.tiles_x) * TILE;
+        Rect {
+            x0,
+            y0,
+            x1: (x0 + TILE).min(self.rect.x1),
+            y1: (y0 + TILE).min(self.rect.y1),
+        }
+    }
+
+    /// Index in the film of full-image pixel (x, y).
+    fn index(&self, x: u32, y: u32) -> usize {
+        (y - self.rect.y0) as usize * self.rect.width() as usize + (x - self.rect.x0) as usize
+    }
+
+    /// Bring tile `t`'s pixels up to `target` samples on the calling pool
+    /// thread: read their sums and counts, add the new samples, write them
+    /// back. Returns the samples taken.
+    fn tile(&self, film: &Mutex<&mut Accum>, t: u32, target: u32) -> u64 {
         let ti = rayon::current_thread_index().unwrap_or(0);
         let counter = &self.next_query[ti];
         let mut ctx = TraceCtx::new(ti as u32, self.threads, counter.load(Ordering::Relaxed));
-        let (x0, y0, x1, y1) = self.rect(t);
-        let mut pixels = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-        'rows: for y in y0..y1 {
-            for x in x0..x1 {
-                match self.pixel(&mut ctx, x, y) {
-                    Some(p) => pixels.push(p),
-                    None => break 'rows,
+        let tr = self.tile_rect(t);
+        let mut px: Vec<([f64; 3], u32)> = Vec::with_capacity(tr.len());
+        if let Ok(f) = film.lock() {
+            for y in tr.y0..tr.y1 {
+                for x in tr.x0..tr.x1 {
+                    let i = self.index(x, y);
+                    px.push((f.sums[i], f.counts[i]));
                 }
             }
         }
-        counter.store(ctx.query_counter(), Ordering::Relaxed);
-        Tile {
-            index: t,
-            pixels,
-            stats: ctx.stats,
+        let mut taken = 0u64;
+        let tw = tr.width() as usize;
+        for (i, (sum, count)) in px.iter_mut().enumerate() {
+            let (x, y) = (tr.x0 + (i % tw) as u32, tr.y0 + (i / tw) as u32);
+            let before = *count;
+            let go_on = self.pixel(&mut ctx, x, y, sum, count, target);
+            taken += (*count - before) as u64;
+            if !go_on {
+                break;
+            }
         }
+        counter.store(ctx.query_counter(), Ordering::Relaxed);
+        if let Ok(mut f) = film.lock() {
+            for (i, (sum, count)) in px.into_iter().enumerate() {
+                let (x, y) = (tr.x0 + (i % tw) as u32, tr.y0 + (i / tw) as u32);
+                let j = self.index(x, y);
+                f.sums[j] = sum;
+                f.counts[j] = count;
+            }
+            f.stats.merge(&ctx.stats);
+        }
+        taken
     }
 
-    /// The average of the pixel's samples; `None` once the render must stop.
-    fn pixel(&self, ctx: &mut TraceCtx, x: u32, y: u32) -> Option<[f64; 3]> {
+    /// Add the pixel's samples `count..target` to its running `sum`, in
+    /// sample order; false once the render must stop (the samples taken so
+    /// far are counted).
+    fn pixel(
+        &self,
+        ctx: &mut TraceCtx,
+        x: u32,
+        y: u32,
+        sum: &mut [f64; 3],
+        count: &mut u32,
+        target: u32,
+    ) -> bool {
         let world = self.tracer.world();
         let pixel = y as u64 * self.width as u64 + x as u64;
-        let mut sum = [0.0f64; 3];
-        for s in 0..self.spp {
+        while *count < target {
+            if self.interrupt.is_some_and(|s| s.load(Ordering::Relaxed)) {
+                return false;
+            }
+            let s = *count;
             ctx.rng = RngState::for_sample(self.seed, pixel, s as u64);
-            let (jx, jy) = film_offset(self.filter, self.spp, &mut ctx.rng);
+            let (jx, jy) = film_offset(self.filter, s, self.spp, self.stratified, &mut ctx.rng);
             let sample = CameraSample {
                 film: [
                     (x as f32 + jx) / self.width as f32,
@@ -261,7 +555,7 @@ impl Job<'_, '_> {
                 self.tracer.camera_li(ctx, &ray).scale(weight)
             };
             if self.failure.check(ctx) {
-                return None;
+                return false;
             }
             if l.is_finite() {
                 sum[0] += l.r as f64;
@@ -270,20 +564,42 @@ impl Job<'_, '_> {
             } else {
                 ctx.stats.nonfinite_samples += 1;
             }
+            *count += 1;
         }
-        let inv = 1.0 / self.spp as f64;
-        Some([sum[0] * inv, sum[1] * inv, sum[2] * inv])
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stratified_samples_fill_one_cell_each() {
+        let mut rng = RngState::seeded(5);
+        for spp in [4u32, 16, 64] {
+            let m = (spp as f64).sqrt() as u32;
+            let mut seen = vec![0u32; spp as usize];
+            for s in 0..spp {
+                let (x, y) = film_offset(Some(Filter::Box), s, spp, true, &mut rng);
+                assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+                let cell = (y * m as f32) as u32 * m + (x * m as f32) as u32;
+                seen[cell as usize] += 1;
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{spp}: {seen:?}");
+        }
+        // Not a square: independent, anywhere in the pixel.
+        let (x, y) = film_offset(Some(Filter::Box), 3, 5, true, &mut rng);
+        assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
     }
 
-    /// Place a finished tile in the film and add its counters.
-    fn place(&self, film: &mut Film, tile: Tile) {
-        let w = self.width as usize;
-        let (x0, y0, x1, _) = self.rect(tile.index);
-        let tw = (x1 - x0) as usize;
-        for (i, p) in tile.pixels.into_iter().enumerate() {
-            let (x, y) = (x0 as usize + i % tw, y0 as usize + i / tw);
-            film.pixels[y * w + x] = p;
-        }
-        film.stats.merge(&tile.stats);
+    #[test]
+    fn one_sample_without_a_filter_is_the_centre() {
+        let mut rng = RngState::seeded(1);
+        assert_eq!(film_offset(None, 0, 1, true, &mut rng), (0.5, 0.5));
+        assert_ne!(
+            film_offset(Some(Filter::Box), 0, 1, false, &mut rng),
+            (0.5, 0.5)
+        );
     }
 }

@@ -402,7 +402,7 @@ fn size_cases() -> Vec<Case> {
             "width = 8\nheight = 8",
             "width = 16384\nheight = 16384",
             &[
-                "scene.toml: the film of 16384x16384 pixels needs 6144 MiB",
+                "scene.toml: the film of 16384x16384 pixels needs 7168 MiB",
                 "could not be allocated",
             ],
         )

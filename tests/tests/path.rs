@@ -196,7 +196,8 @@ children = [
 /// `scenes/cornell.toml` against Mitsuba 3's 4096-spp reference: at 16 spp
 /// its error must be what an unbiased estimator gives (Mitsuba's own at 16
 /// spp, 0.0361, with 10 % to spare), and its mean colour must match the
-/// reference's within the noise of a mean over 65,536 pixels.
+/// reference's within the noise of a mean over 65,536 pixels; with
+/// independent and with stratified pixel positions.
 #[test]
 fn cornell_box_converges_to_mitsuba() {
     let reference = root().join("../shared/anchors/mitsuba/ref_cornell.exr");
@@ -204,15 +205,22 @@ fn cornell_box_converges_to_mitsuba() {
         eprintln!("skipped: {} is absent", reference.display());
         return;
     }
+    for sampler in ["independent", "stratified"] {
+        cornell_against(&reference, sampler);
+    }
+}
+
+fn cornell_against(reference: &std::path::Path, sampler: &str) {
     let dir = tempfile::tempdir().unwrap();
+    let set = format!("render.sampler={sampler}");
     let (run, img) = render_file(
         &root().join("scenes/cornell.toml"),
         dir.path(),
-        &["--set", "render.spp=16"],
+        &["--set", "render.spp=16", "--set", &set],
     );
     assert!(run.ok, "{}", run.stderr);
     let img = img.unwrap();
-    let r = Image::read(&reference);
+    let r = Image::read(reference);
     assert_eq!((img.width, img.height), (r.width, r.height));
     let n = img.data.len() as f64;
     let mse = img

@@ -8,10 +8,10 @@ use crate::error::SceneError;
 use crate::tree::{Node, Origin, Val};
 use std::collections::BTreeMap;
 
-/// Largest image, in pixels (the f64 film takes 24 bytes a pixel).
+/// Largest image, in pixels (the f64 film takes 28 bytes a pixel: sums and sample count).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
-const KEYS: [&str; 11] = [
+const KEYS: [&str; 12] = [
     "width",
     "height",
     "spp",
@@ -23,6 +23,7 @@ const KEYS: [&str; 11] = [
     "output",
     "origin",
     "filter",
+    "sampler",
 ];
 const OBJ: &str = "render";
 
@@ -56,6 +57,9 @@ pub struct Render {
     /// The pixel filter, or `None` (not given): one sample looks through
     /// the pixel centre, more are spread uniformly over the pixel (a box).
     pub filter: Option<Filter>,
+    /// Pixel positions stratified over an m×m grid (`sampler =
+    /// "stratified"`, used when spp = m²), or independent (the default).
+    pub stratified: bool,
 }
 
 /// A pixel filter, importance-sampled: each sample's film position is drawn
@@ -80,6 +84,24 @@ impl Filter {
             Filter::Tent => "tent",
             Filter::Gaussian => "gaussian",
         }
+    }
+}
+
+/// `sampler = "independent" | "stratified"`: whether pixel positions are
+/// stratified.
+fn sampler(r: &Node) -> Result<bool, SceneError> {
+    let Some(n) = r.get("sampler") else {
+        return Ok(false);
+    };
+    match string(n, OBJ, "sampler")?.as_str() {
+        "independent" => Ok(false),
+        "stratified" => Ok(true),
+        other => Err(SceneError::invalid(
+            &n.origin,
+            OBJ,
+            "sampler",
+            format!("unknown sampler `{other}`: use \"independent\" or \"stratified\""),
+        )),
     }
 }
 
@@ -155,6 +177,7 @@ impl Render {
                 .transpose()?,
             origin,
             filter: filter(r)?,
+            stratified: sampler(r)?,
         })
     }
 }

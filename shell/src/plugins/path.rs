@@ -65,4 +65,34 @@ impl PluginPath {
         }
         out
     }
+
+    /// Every plugin library along the path, folder by folder in path
+    /// order and by file name within a folder, shadowed ones included:
+    /// each file named `<prefix>rtk_<name><suffix>` with the class its name
+    /// promises (`None` when that is not an identifier, which
+    /// [`available`](Self::available) skips).
+    pub fn libraries(&self) -> Vec<(PathBuf, Option<String>)> {
+        let (pre, suf) = (
+            format!("{}rtk_", std::env::consts::DLL_PREFIX),
+            std::env::consts::DLL_SUFFIX,
+        );
+        let mut out = Vec::new();
+        for d in &self.dirs {
+            let Ok(rd) = std::fs::read_dir(d) else {
+                continue;
+            };
+            let mut names: Vec<_> = rd
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            names.sort();
+            for n in names {
+                if let Some(class) = n.strip_prefix(&pre).and_then(|r| r.strip_suffix(suf)) {
+                    let class = is_identifier(class).then(|| class.to_string());
+                    out.push((d.join(&n), class));
+                }
+            }
+        }
+        out
+    }
 }

@@ -1,0 +1,290 @@
+#![doc = include_str!("../README.md")]
+
+mod bpt;
+mod patch;
+#[cfg(test)]
+mod tests;
+
+use patch::{Patch, V3};
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::serde::Deserialize;
+use rtk_kernel::*;
+use std::path::PathBuf;
+
+#[derive(Deserialize)]
+#[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
+struct Params {
+    #[serde(default)]
+    file: Option<String>,
+    #[serde(default)]
+    patches: Option<Vec<Vec<[f64; 3]>>>,
+    #[serde(default = "four")]
+    grid: u32,
+}
+
+fn four() -> u32 {
+    4
+}
+
+/// Most sub-patches a side.
+const MAX_GRID: u32 = 16;
+
+struct Bicubic {
+    file: Option<PathBuf>,
+    origin: [f64; 3],
+    grid: usize,
+    patches: Vec<Patch>,
+    /// Each patch's box, rounded outwards to f32.
+    boxes: Vec<Bounds3>,
+    bounds: Bounds3,
+}
+
+/// The f32 box around an f64 box, rounded outwards.
+fn f32_box(lo: V3, hi: V3) -> Bounds3 {
+    let down = |x: f64| {
+        let f = x as f32;
+        if f as f64 > x {
+            f.next_down()
+        } else {
+            f
+        }
+    };
+    let up = |x: f64| {
+        let f = x as f32;
+        if (f as f64) < x {
+            f.next_up()
+        } else {
+            f
+        }
+    };
+    Bounds3::new(
+        Vec3::new(down(lo[0]), down(lo[1]), down(lo[2])),
+        Vec3::new(up(hi[0]), up(hi[1]), up(hi[2])),
+    )
+}
+
+/// Patches from control points already placed (f32, relative to the
+/// renderer's origin): converted exactly to f64.
+fn build(points: &[[[f32; 3]; 16]], g: usize) -> (Vec<Patch>, Vec<Bounds3>, Bounds3) {
+    let patches: Vec<Patch> = points
+        .iter()
+        .map(|cp| Patch::new(cp.map(|p| p.map(f64::from)), g))
+        .collect();
+    let boxes: Vec<Bounds3> = patches
+        .iter()
+        .map(|p| f32_box(p.bounds.lo, p.bounds.hi))
+        .collect();
+    let bounds = boxes.iter().fold(Bounds3::EMPTY, |a, b| a.union(*b));
+    (patches, boxes, bounds)
+}
+
+impl Plugin for Bicubic {
+    type Params = Params;
+
+    fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        if p.grid == 0 || p.grid > MAX_GRID {
+            return Err(PluginError::key(
+                "grid",
+                format!("must be from 1 to {MAX_GRID}, got {}", p.grid),
+            ));
+        }
+        let g = p.grid as usize;
+        match (p.file, p.patches) {
+            (Some(_), Some(_)) => Err(PluginError::key(
+                "patches",
+                "give either `file` or `patches`, not both",
+            )),
+            (None, None) => Err(PluginError::msg(
+                "needs `file` (a Newell-format patch file) or `patches` (arrays of 16 control points)",
+            )),
+            (Some(f), None) => {
+                if f.is_empty() {
+                    return Err(PluginError::key("file", "must name a patch file"));
+                }
+                Ok(Bicubic {
+                    file: Some(env.resolve(&f)),
+                    origin: env.origin,
+                    grid: g,
+                    patches: vec![],
+                    boxes: vec![],
+                    bounds: Bounds3::EMPTY,
+                })
+            }
+            (None, Some(list)) => {
+                if list.is_empty() {
+                    return Err(PluginError::key("patches", "must hold at least one patch"));
+                }
+                let mut pts = Vec::with_capacity(list.len());
+                for (i, patch) in list.iter().enumerate() {
+                    if patch.len() != 16 {
+                        return Err(PluginError::key(
+                            format!("patches[{i}]"),
+                            format!("must hold 16 control points, got {}", patch.len()),
+                        ));
+                    }
+                    let mut cp = [[0.0f32; 3]; 16];
+                    for (j, q) in patch.iter().enumerate() {
+                        cp[j] = env.position(&format!("patches[{i}][{j}]"), *q)?.to_array();
+                    }
+                    pts.push(cp);
+                }
+                let (patches, boxes, bounds) = build(&pts, g);
+                Ok(Bicubic {
+                    file: None,
+                    origin: env.origin,
+                    grid: g,
+                    patches,
+                    boxes,
+                    bounds,
+                })
+            }
+        }
+    }
+}
+
+impl Bicubic {
+    /// Nearest hit among `ids` (lowest id on equal t).
+    fn nearest(&self, ray: &Ray, ids: impl Iterator<Item = u32>) -> Option<(f32, u32, [f32; 2])> {
+        let o = ray.origin.to_array().map(f64::from);
+        let d = ray.dir.to_array().map(f64::from);
+        let mut best: Option<(f32, u32, [f32; 2])> = None;
+        let mut t_max = ray.t_max as f64;
+        for i in ids {
+            if let Some(h) = self.patches[i as usize].intersect(o, d, ray.t_min as f64, t_max) {
+                let t = h.t as f32;
+                // The f32 t must itself be accepted by the ray.
+                if !ray.accepts(t) {
+                    continue;
+                }
+                let better = match best {
+                    Some((bt, bi, _)) => t < bt || (t == bt && i < bi),
+                    None => true,
+                };
+                if better {
+                    best = Some((t, i, [h.u as f32, h.v as f32]));
+                    t_max = h.t.max(t as f64);
+                }
+            }
+        }
+        best
+    }
+}
+
+impl Object for Bicubic {
+    fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
+        let Some(path) = &self.file else {
+            return Ok(());
+        };
+        let bytes = env.read_file(path).map_err(|e| {
+            PluginError::key("file", format!("cannot read {}: {e}", path.display()))
+        })?;
+        let text = String::from_utf8_lossy(&bytes);
+        let (idx, verts) = bpt::parse(&text)
+            .map_err(|e| PluginError::key("file", format!("{}: {e}", path.display())))?;
+        let o = self.origin;
+        let place = |v: [f64; 3]| -> [f32; 3] { std::array::from_fn(|k| (v[k] - o[k]) as f32) };
+        let pts: Vec<[[f32; 3]; 16]> = idx
+            .iter()
+            .map(|p| p.map(|k| place(verts[k as usize])))
+            .collect();
+        let (patches, boxes, bounds) = build(&pts, self.grid);
+        self.patches = patches;
+        self.boxes = boxes;
+        self.bounds = bounds;
+        Ok(())
+    }
+
+    fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
+        self.bounds
+    }
+
+    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
+        ctx.stats.prim_tests += self.patches.len() as u64;
+        match self.nearest(ray, 0..self.patches.len() as u32) {
+            Some((t, prim, uv)) => {
+                hit.record_leaf(level, t, prim, uv);
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn local_geom(
+        &self,
+        _ctx: &mut TraceCtx,
+        ray: &Ray,
+        hit: &Hit,
+        level: u32,
+        mask: u32,
+        out: &mut LocalGeom,
+    ) {
+        let e = hit.entry(level);
+        let patch = &self.patches[e.prim as usize];
+        let o = ray.origin.to_array().map(f64::from);
+        let d = ray.dir.to_array().map(f64::from);
+        // The hit record keeps (u, v) in f32: polish them on this ray.
+        let (u, v) = patch.refine(o, d, e.uv[0] as f64, e.uv[1] as f64);
+        let ev = patch.eval(u, v);
+        let err = patch.point_error(&ev);
+        // Never NaN: a patch degenerate around (u, v) faces the ray.
+        let n = patch.normal(u, v).unwrap_or_else(|| {
+            let l = patch::dot(d, d).sqrt();
+            d.map(|x| -x / l)
+        });
+        let n = Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32).normalize_or(Vec3::Y);
+        out.p = Vec3::new(ev.p[0] as f32, ev.p[1] as f32, ev.p[2] as f32).into();
+        out.p_err = Vec3::new(err[0] as f32, err[1] as f32, err[2] as f32).into();
+        out.ng = n.into();
+        out.ns = n.into();
+        out.filled |= geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL;
+        if mask & (geom_mask::UV | geom_mask::TANGENTS) != 0 {
+            out.uv = [u.clamp(0.0, 1.0) as f32, v.clamp(0.0, 1.0) as f32];
+            let du = Vec3::new(ev.du[0] as f32, ev.du[1] as f32, ev.du[2] as f32);
+            let dv = Vec3::new(ev.dv[0] as f32, ev.dv[1] as f32, ev.dv[2] as f32);
+            let (du, dv) =
+                if du.cross(dv).length_squared() > 0.0 && du.is_finite() && dv.is_finite() {
+                    (du, dv)
+                } else {
+                    n.any_orthonormal_pair()
+                };
+            out.dpdu = du.into();
+            out.dpdv = dv.into();
+            out.filled |= geom_mask::UV | geom_mask::TANGENTS;
+        }
+    }
+}
+
+impl PrimitiveSet for Bicubic {
+    fn prim_count(&self) -> u32 {
+        self.patches.len() as u32
+    }
+    fn prim_bounds(&self, first: u32, out: &mut [Bounds3]) {
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = self.boxes[first as usize + k];
+        }
+    }
+    fn intersect_prims(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        ids: &[u32],
+        hit: &mut Hit,
+        level: u32,
+    ) -> bool {
+        ctx.stats.prim_tests += ids.len() as u64;
+        match self.nearest(ray, ids.iter().copied()) {
+            Some((t, prim, uv)) => {
+                hit.record_leaf(level, t, prim, uv);
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+rtk_kernel::export_object!(
+    Bicubic,
+    class = "bicubic",
+    doc = include_str!("../README.md"),
+    capabilities = [PrimitiveSet]
+);

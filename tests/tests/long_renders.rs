@@ -1,0 +1,220 @@
+//! Long renders (issue 11): checkpoint and resume give exactly the image of
+//! one uninterrupted run; a checkpoint of another scene or other settings
+//! is refused; Ctrl-C (SIGINT) writes a valid partial image and exits 130.
+
+use rtk_tests::*;
+use std::path::{Path, PathBuf};
+
+fn cornell() -> PathBuf {
+    root().join("scenes/cornell.toml")
+}
+
+/// 32x32 at 8 spp: small, noisy (path traced), quick.
+const SIZE: [&str; 6] = [
+    "--set",
+    "render.width=32",
+    "--set",
+    "render.height=32",
+    "--set",
+    "render.spp=8",
+];
+
+fn render(dir: &Path, out: &str, extra: &[&str]) -> Run {
+    let scene = cornell();
+    let out = dir.join(out);
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    if !extra.contains(&"--threads") {
+        args.extend_from_slice(&["--threads", "2"]);
+    }
+    args.extend_from_slice(&SIZE);
+    args.extend_from_slice(extra);
+    Run::from(rtk(&args).output().expect("run rtk"))
+}
+
+#[test]
+fn checkpoint_then_resume_is_bit_identical_to_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let ck = dir.path().join("ck.rtkfilm");
+    let ck = ck.to_str().unwrap();
+    let run = render(dir.path(), "single.exr", &[]);
+    assert!(run.ok, "{}", run.stderr);
+    // One pass of 1 sample, then stop (time limit 0): the checkpoint holds 1 spp.
+    let run = render(
+        dir.path(),
+        "a.exr",
+        &[
+            "--checkpoint",
+            ck,
+            "--checkpoint-every",
+            "0",
+            "--time-limit",
+            "0",
+        ],
+    );
+    assert!(run.ok, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("1 of 8 samples per pixel"),
+        "{}",
+        run.stderr
+    );
+    // Resume it for another pass (and one thread this time), then to the end.
+    let run = render(
+        dir.path(),
+        "b.exr",
+        &[
+            "--resume",
+            ck,
+            "--checkpoint",
+            ck,
+            "--time-limit",
+            "0",
+            "--threads",
+            "1",
+        ],
+    );
+    assert!(run.ok, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("2 of 8 samples per pixel"),
+        "{}",
+        run.stderr
+    );
+    let run = render(dir.path(), "resumed.exr", &["--resume", ck]);
+    assert!(run.ok, "{}", run.stderr);
+    let single = Image::read(&dir.path().join("single.exr"));
+    let resumed = Image::read(&dir.path().join("resumed.exr"));
+    assert!(single.data.iter().any(|v| *v > 0.0));
+    let bits = |i: &Image| i.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&single), bits(&resumed), "resumed image differs");
+    // Partial renders are not the final image (the test would be void otherwise).
+    let partial = Image::read(&dir.path().join("b.exr"));
+    assert_ne!(bits(&single), bits(&partial));
+}
+
+#[test]
+fn resume_refuses_a_checkpoint_of_another_scene_or_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let ck = dir.path().join("ck.rtkfilm");
+    let ck = ck.to_str().unwrap();
+    let run = render(
+        dir.path(),
+        "a.exr",
+        &["--checkpoint", ck, "--time-limit", "0"],
+    );
+    assert!(run.ok, "{}", run.stderr);
+    // Another scene: an object changed by --set.
+    let run = render(
+        dir.path(),
+        "b.exr",
+        &["--resume", ck, "--set", "render.background=[1,0,0]"],
+    );
+    assert!(!run.ok);
+    assert!(
+        run.stderr.contains("was rendered from another scene"),
+        "{}",
+        run.stderr
+    );
+    assert!(!dir.path().join("b.exr").exists());
+    // Other settings: spp.
+    let run = render(dir.path(), "b.exr", &["--resume", ck, "--spp", "16"]);
+    assert!(!run.ok);
+    assert!(
+        run.stderr
+            .contains("other settings: spp 8 (this render: 16)"),
+        "{}",
+        run.stderr
+    );
+    // Another crop.
+    let run = render(
+        dir.path(),
+        "b.exr",
+        &["--resume", ck, "--crop", "0,0,16,16"],
+    );
+    assert!(!run.ok);
+    assert!(
+        run.stderr.contains("--crop must be the same"),
+        "{}",
+        run.stderr
+    );
+    // Not a film file at all.
+    let scene = cornell();
+    let run = render(dir.path(), "b.exr", &["--resume", scene.to_str().unwrap()]);
+    assert!(!run.ok);
+    assert!(
+        run.stderr.contains("is not an rtk film file"),
+        "{}",
+        run.stderr
+    );
+}
+
+#[test]
+#[cfg(unix)]
+fn sigint_writes_a_valid_partial_image_and_exits_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let ck = dir.path().join("ck.rtkfilm");
+    let out = dir.path().join("partial.exr");
+    let scene = cornell();
+    // Far too many samples to finish: the render is stopped by SIGINT once
+    // its first checkpoint (after the first pass) shows it is rendering.
+    let mut child = rtk(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-q",
+        "--threads",
+        "2",
+        "--set",
+        "render.width=32",
+        "--set",
+        "render.height=32",
+        "--spp",
+        "16000000",
+        "--checkpoint",
+        ck.to_str().unwrap(),
+        "--checkpoint-every",
+        "0",
+        "-o",
+        out.to_str().unwrap(),
+    ])
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .expect("spawn rtk");
+    let mut waited = 0;
+    while !ck.exists() {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("rtk ended before its first checkpoint: {status}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        waited += 1;
+        assert!(waited < 20 * 600, "no checkpoint after ten minutes");
+    }
+    let status = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(status.success());
+    let o = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted: wrote"), "{stderr}");
+    assert!(stderr.contains("of 16000000 samples per pixel"), "{stderr}");
+    assert!(stderr.contains("--resume"), "{stderr}");
+    let img = Image::read(&out);
+    assert_eq!((img.width, img.height), (32, 32));
+    assert!(img.data.iter().all(|v| v.is_finite()));
+    // Every pixel has an estimate (the first pass finished): the fewest
+    // samples a pixel has, as printed, is at least 1.
+    let counts = stderr
+        .split("(32x32, ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse::<u64>().ok())
+        .unwrap_or_else(|| panic!("no sample count in: {stderr}"));
+    assert!(counts >= 1, "{stderr}");
+    assert!(img.data.iter().any(|v| *v > 0.0), "an all-black image");
+    assert!(ck.exists());
+}
