@@ -241,6 +241,7 @@ struct Job<'a, 'w> {
     seed: u64,
     filter: Option<Filter>,
     stratified: bool,
+    shutter: [f32; 2],
     tiles_x: u32,
     threads: u32,
     /// Per thread: the next query id (mailbox ids never repeat on a thread).
@@ -372,6 +373,7 @@ pub fn render_passes(
         seed: r.seed,
         filter: r.filter,
         stratified: r.stratified,
+        shutter: r.shutter,
         tiles_x: rect.width().div_ceil(TILE),
         threads: threads as u32,
         next_query: (0..threads).map(|_| AtomicU64::new(0)).collect(),
@@ -546,7 +548,7 @@ impl Job<'_, '_> {
                     (y as f32 + jy) / self.height as f32,
                 ],
                 lens: [ctx.rng.next_f32(), ctx.rng.next_f32()],
-                time: ctx.rng.next_f32(),
+                time: self.shutter[0] + (self.shutter[1] - self.shutter[0]) * ctx.rng.next_f32(),
             };
             let (ray, weight) = world.camera.generate_ray(ctx, &sample);
             let l = if ctx.failed() {

@@ -14,3 +14,8 @@ pub const DEFAULT_ACCEL: &str = "bvh";
 
 /// The integrator a scene gets when `[render]` names none.
 pub const DEFAULT_INTEGRATOR: &str = "whitted";
+
+/// Classes whose own parameters place their child in the renderer's space
+/// (they subtract `[render] origin` in f64 themselves): the shell creates
+/// their children unshifted, as below any instance transform.
+pub const PLACE_THEIR_CHILD: [&str; 2] = [INSTANCE_TRANSFORM, "motion"];

@@ -8,6 +8,7 @@ mod farm;
 mod hostile;
 mod hygiene;
 mod loading;
+mod motion;
 mod long_renders;
 mod materials;
 mod objects;

@@ -180,7 +180,7 @@ impl Builder<'_> {
                 mesh,
             });
         }
-        if od.def.class == rtk_kernel::classes::INSTANCE_TRANSFORM {
+        if rtk_kernel::classes::PLACE_THEIR_CHILD.contains(&od.def.class.as_str()) {
             // Its matrix is the plugin's to read: lights below it cannot be
             // placed. Refuse only if one is there.
             return if self.any_emitter_below(&inst.object)? {
@@ -188,8 +188,8 @@ impl Builder<'_> {
                     &inst.origin,
                     &inst.path,
                     "object",
-                    "an emitting instance below an object of class `transform` cannot be \
-                     placed as a light; use the instance's `transform` list instead",
+                    "an emitting instance below an object of class `transform` or `motion` \
+                     cannot be placed as a light; use the instance's `transform` list instead",
                 ))
             } else {
                 Ok(())

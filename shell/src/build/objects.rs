@@ -231,9 +231,10 @@ impl<'a> Builder<'a> {
         let mut b = created.map_err(|e| call_error(def, None, "its parameters", e))?;
         self.objects_created += 1;
         let flattens = module.flattens_primitives();
-        // A transform object places its child by its matrix, which absorbs
-        // the shift (its plugin subtracts the origin it is given).
-        let children_shifted = shifted && def.class != rtk_kernel::classes::INSTANCE_TRANSFORM;
+        // A transform or motion object places its child by its matrix,
+        // which absorbs the shift (its plugin subtracts the origin it is given).
+        let children_shifted =
+            shifted && !rtk_kernel::classes::PLACE_THEIR_CHILD.contains(&def.class.as_str());
         for inst in &od.children {
             let child = self.instance(inst, flattens, children_shifted)?;
             let data = self.bindings(inst)?;

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 /// Largest image, in pixels (the f64 film takes 28 bytes a pixel: sums and sample count).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
-const KEYS: [&str; 12] = [
+const KEYS: [&str; 13] = [
     "width",
     "height",
     "spp",
@@ -24,6 +24,7 @@ const KEYS: [&str; 12] = [
     "origin",
     "filter",
     "sampler",
+    "shutter",
 ];
 const OBJ: &str = "render";
 
@@ -60,6 +61,9 @@ pub struct Render {
     /// Pixel positions stratified over an m×m grid (`sampler =
     /// "stratified"`, used when spp = m²), or independent (the default).
     pub stratified: bool,
+    /// The shutter interval `[open, close]` ⊂ [0, 1]: each camera sample's
+    /// time is uniform in it (motion blur); `[t, t]` freezes time at t.
+    pub shutter: [f32; 2],
 }
 
 /// A pixel filter, importance-sampled: each sample's film position is drawn
@@ -84,6 +88,34 @@ impl Filter {
             Filter::Tent => "tent",
             Filter::Gaussian => "gaussian",
         }
+    }
+}
+
+/// `shutter = [open, close]`, 0 ≤ open ≤ close ≤ 1 (the `motion` class's
+/// keyframes live in [0, 1], and aggregates bound their children over it).
+fn shutter(r: &Node) -> Result<[f32; 2], SceneError> {
+    let Some(n) = r.get("shutter") else {
+        return Ok([0.0, 1.0]);
+    };
+    let bad = || {
+        SceneError::invalid(
+            &n.origin,
+            OBJ,
+            "shutter",
+            "expected [open, close] with 0 <= open <= close <= 1",
+        )
+    };
+    let Val::Arr(items) = &n.value else {
+        return Err(bad());
+    };
+    let v: Vec<f64> = items
+        .iter()
+        .map(|i| number(i, OBJ, "shutter"))
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    match v[..] {
+        [a, b] if (0.0..=1.0).contains(&a) && (a..=1.0).contains(&b) => Ok([a as f32, b as f32]),
+        _ => Err(bad()),
     }
 }
 
@@ -178,6 +210,7 @@ impl Render {
             origin,
             filter: filter(r)?,
             stratified: sampler(r)?,
+            shutter: shutter(r)?,
         })
     }
 }
