@@ -2,15 +2,16 @@
 
 mod aggregates;
 mod bad_scenes;
+mod csg;
 mod distributed;
 mod dropin;
 mod farm;
 mod hostile;
 mod hygiene;
 mod loading;
-mod motion;
 mod long_renders;
 mod materials;
+mod motion;
 mod objects;
 mod panics;
 mod path;
