@@ -2,9 +2,12 @@
 //! cameras and lights.
 
 mod analytic;
+mod bench_aggregate;
 mod checkpoint;
+mod conform;
 mod converge;
 mod images;
+mod new;
 mod output;
 mod plot;
 mod rays;
@@ -77,6 +80,17 @@ enum Command {
         #[arg(required = true)]
         parts: Vec<PathBuf>,
     },
+    /// Write a ready-to-build plugin crate of any kind (Cargo.toml against
+    /// this rtk's kernel, the smallest correct implementation, its README.md
+    /// and a scene using it).
+    New(new::NewArgs),
+    /// Time an aggregate against others on meshes, side by side in one run:
+    /// build time, memory, Mrays/s (primary, incoherent, occluded), ratios.
+    BenchAggregate(bench_aggregate::BenchArgs),
+    /// Run the conformance suite of object and aggregate plugins against a
+    /// plugin library: one line per check, pass or fail; exits non-zero on
+    /// any failure.
+    Conform(conform::ConformArgs),
 }
 
 #[derive(clap::Args)]
@@ -137,7 +151,20 @@ struct RenderArgs {
     time_limit: Option<f64>,
 }
 
+/// Die quietly on a closed pipe (`rtk diff A B | head -1`), as command-line
+/// tools do: Rust ignores SIGPIPE, which turns every later `println!` into
+/// a panic.
+fn restore_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to its default at start-up,
+    // before any thread exists, is async-signal-safe and races nothing.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() {
+    restore_sigpipe();
     let start = Instant::now();
     let cli = Cli::parse();
     let res = match cli.command {
@@ -160,6 +187,13 @@ fn main() {
             }
         }
         Command::Merge { out, parts } => checkpoint::merge(&out, &parts),
+        Command::New(a) => new::run(a),
+        Command::Conform(a) => {
+            pool(Some(a.threads.max(2))).and_then(|(pool, _)| conform::run(a, &pool))
+        }
+        Command::BenchAggregate(a) => {
+            pool(a.threads).and_then(|(pool, _)| bench_aggregate::run(a, &pool, &Pool(&pool)))
+        }
     };
     if let Err(e) = res {
         eprintln!("error: {}", printable(&format!("{e:#}")));

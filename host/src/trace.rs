@@ -77,21 +77,11 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
         .map(|d| d.as_secs_f64())
         .sum();
     let memory = resident_bytes().saturating_sub(rss0);
-    let b = world.bounds;
-    if b.is_empty() {
-        bail!(
-            "{}: the scene is empty (its root has no bounds)",
-            a.input.display()
-        );
-    }
-    let (lo, hi) = (
-        b.min.to_array().map(|x| x as f64),
-        b.max.to_array().map(|x| x as f64),
-    );
+    let (lo, hi) = world_box(&world, &a.input)?;
     let (set_name, rays) = match (&a.rays, a.rayset) {
         (Some(p), _) => (p.display().to_string(), rays::read_rays(p)?),
-        (None, Some(RaySet::Primary)) => ("primary".into(), rays::primary(lo, hi)),
-        (None, Some(RaySet::Incoherent)) => ("incoherent".into(), rays::incoherent(lo, hi)),
+        (None, Some(set @ RaySet::Primary)) => ("primary".into(), generate(set, lo, hi)),
+        (None, Some(set @ RaySet::Incoherent)) => ("incoherent".into(), generate(set, lo, hi)),
         (None, None) => {
             bail!("say which rays to trace: --rays FILE or --rayset primary|incoherent")
         }
@@ -142,7 +132,6 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
 
 /// The world to trace: the scene, or a generated one over the mesh.
 fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
-    let mut registry = Registry::new(PluginPath::standard(&a.plugin_path));
     let ext = a
         .input
         .extension()
@@ -159,6 +148,17 @@ fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
             (file, sets)
         }
     };
+    build_world(file, sets, &a.plugin_path, parallel)
+}
+
+/// Build the world of `file` with `sets` applied, in world coordinates.
+pub(crate) fn build_world(
+    file: rtk_shell::SceneFile,
+    sets: Vec<String>,
+    plugin_path: &[PathBuf],
+    parallel: &dyn Parallel,
+) -> Result<World> {
+    let mut registry = Registry::new(PluginPath::standard(plugin_path));
     let mut file = file;
     let mut sets = sets;
     // Ray files and the generated sets are in world coordinates: no
@@ -169,9 +169,32 @@ fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
     Ok(rtk_shell::build(&file, desc, &mut registry, parallel)?)
 }
 
+/// The generated ray set over the box [lo, hi].
+pub(crate) fn generate(set: RaySet, lo: [f64; 3], hi: [f64; 3]) -> Vec<RayRec> {
+    match set {
+        RaySet::Primary => rays::primary(lo, hi),
+        RaySet::Incoherent => rays::incoherent(lo, hi),
+    }
+}
+
+/// The world's box as f64 corners; an error if it is empty.
+pub(crate) fn world_box(world: &World, what: &Path) -> Result<([f64; 3], [f64; 3])> {
+    let b = world.bounds;
+    if b.is_empty() {
+        bail!(
+            "{}: the scene is empty (its root has no bounds)",
+            what.display()
+        );
+    }
+    Ok((
+        b.min.to_array().map(|x| x as f64),
+        b.max.to_array().map(|x| x as f64),
+    ))
+}
+
 /// A scene holding the mesh (tested by brute force: `accel = "none"`)
 /// under one aggregate, `bvh` by default.
-fn mesh_scene(mesh: &Path, aggregate: Option<&str>) -> Result<rtk_shell::SceneFile> {
+pub(crate) fn mesh_scene(mesh: &Path, aggregate: Option<&str>) -> Result<rtk_shell::SceneFile> {
     let abs = std::path::absolute(mesh).with_context(|| format!("{}", mesh.display()))?;
     let agg = aggregate.unwrap_or(rtk_kernel::classes::DEFAULT_ACCEL);
     let file = toml_string(&abs.to_string_lossy());
@@ -223,7 +246,7 @@ fn root_object(file: &rtk_shell::SceneFile) -> Result<String> {
 }
 
 /// Trace every ray on the pool, in chunks; hits in ray order.
-fn trace_all(
+pub(crate) fn trace_all(
     world: &World,
     rays: &[RayRec],
     occluded: bool,
@@ -301,7 +324,7 @@ fn trace_one(world: &World, ctx: &mut TraceCtx, r: &RayRec, occluded: bool) -> H
 }
 
 /// Resident memory of the process, from /proc (0 where unavailable).
-fn resident_bytes() -> usize {
+pub(crate) fn resident_bytes() -> usize {
     std::fs::read_to_string("/proc/self/statm")
         .ok()
         .and_then(|s| s.split_whitespace().nth(1)?.parse::<usize>().ok())

@@ -104,6 +104,8 @@ pub fn fixtures_dir() -> &'static Path {
             "rtk_notplugin",
             "-p",
             "rtk_dropin",
+            "-p",
+            "rtk_brokenagg",
             "--manifest-path",
         ])
         .arg(&manifest)
@@ -345,4 +347,26 @@ impl Image {
         let i = ((y * self.width + x) * 3) as usize;
         [self.data[i], self.data[i + 1], self.data[i + 2]]
     }
+}
+
+/// Build an out-of-tree plugin crate (as `rtk new` writes) with
+/// `cargo build --release`, in the fixtures' target directory so that the
+/// kernel built for the fixtures is reused (with the fixtures' lock file, so
+/// the dependencies resolve to the same versions). Returns the folder
+/// holding its library.
+pub fn build_plugin_crate(dir: &Path) -> PathBuf {
+    let (target, _) = target_and_profile();
+    let ftarget = target.join("fixtures");
+    if !dir.join("Cargo.lock").exists() {
+        let _ = std::fs::copy(
+            root().join("tests/fixtures/Cargo.lock"),
+            dir.join("Cargo.lock"),
+        );
+    }
+    let mut c = cargo();
+    c.current_dir(dir)
+        .args(["build", "--release", "--target-dir"])
+        .arg(&ftarget);
+    run_cargo(c, &dir.display().to_string());
+    ftarget.join("release")
 }

@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// The aggregates that must match the list (every one that is built).
-const AGGREGATES: &[&str] = &["bvh", "grid", "octree", "kdtree"];
+const AGGREGATES: &[&str] = &["bvh", "grid", "octree", "kdtree", "slabs"];
 
 /// A random scene; `inner` is the class of the nested cluster.
 fn scene(seed: u64, dir: &Path, inner: &str) -> String {

@@ -1,6 +1,7 @@
 //! rtk's integration tests, one binary (ripgrep's layout): each module a topic.
 
 mod aggregates;
+mod authoring;
 mod bad_scenes;
 mod csg;
 mod distributed;

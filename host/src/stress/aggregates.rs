@@ -408,6 +408,7 @@ fn a1(b: &mut Bench) -> Result<Vec<Line>> {
         ("grid 8^3", class("grid", &grid8), ""),
         ("octree", class("octree", "max_leaf = 2\n"), ""),
         ("kdtree", class("kdtree", "max_leaf = 1\n"), ""),
+        ("slabs", class("slabs", "max_leaf = 1\n"), ""),
     ];
     let subjects = subjects(b, &list, &children, |_| defs.clone())?;
     let coord = |rng: &mut RngState| match rng.next_u32() % 9 {
@@ -504,6 +505,7 @@ fn a2(b: &mut Bench) -> Result<Vec<Line>> {
             ("grid", class("grid", ""), ""),
             ("octree", class("octree", ""), ""),
             ("kdtree", class("kdtree", ""), ""),
+            ("slabs", class("slabs", ""), ""),
         ];
         let subjects = subjects(b, &list, &children, |_| defs.clone())?;
         let mut rays = Vec::with_capacity(n);
@@ -535,12 +537,12 @@ fn a2(b: &mut Bench) -> Result<Vec<Line>> {
         let setup = format!("|c| {}, {n} edge rays", mag(dist));
         lines.push(Line::count(&setup, "tight-box false misses", slab_misses));
         lines.push(Line::count(
-            format!("|c| {}, 4 aggregates", mag(dist)),
+            format!("|c| {}, {} aggregates", mag(dist), list.len()),
             "false misses vs list",
             got.iter().map(|t| t.false_misses).sum(),
         ));
         lines.push(Line::count(
-            format!("|c| {}, 4 aggregates", mag(dist)),
+            format!("|c| {}, {} aggregates", mag(dist), list.len()),
             "nearest/any-hit mismatches",
             got.iter().map(|t| t.nearest + t.any_hit).sum(),
         ));
@@ -652,6 +654,8 @@ fn a3(b: &mut Bench) -> Result<Vec<Line>> {
         ("grid(kdtree)", class("grid", ""), "kdtree"),
         ("octree(bvh)", class("octree", ""), "bvh"),
         ("kdtree(octree)", class("kdtree", ""), "octree"),
+        ("slabs(bvh)", class("slabs", ""), "bvh"),
+        ("bvh(slabs)", class("bvh", ""), "slabs"),
     ];
     let subjects = subjects(b, &list, &children, defs)?;
     let mut rays = Vec::with_capacity(n);
@@ -842,6 +846,7 @@ fn a4(b: &mut Bench) -> Result<Vec<Line>> {
         ("octree", class("octree", ""), ""),
         ("kdtree", class("kdtree", ""), ""),
         ("bvh", class("bvh", ""), ""),
+        ("slabs", class("slabs", ""), ""),
     ];
     let subjects = subjects(b, &list, &children, |_| defs.clone())?;
     let small = |rng: &mut RngState| (rng.next_u32() % 7) as f32 - 3.0;
@@ -1034,6 +1039,7 @@ fn a5(b: &mut Bench) -> Result<Vec<Line>> {
         ("kdtree(bvh)", class("kdtree", "max_leaf = 1\n"), "bvh"),
         ("bvh(bvh)", class("bvh", "max_leaf = 1\n"), "bvh"),
         ("grid 32^3(kdtree)", grid, "kdtree"),
+        ("slabs(bvh)", class("slabs", "max_leaf = 1\n"), "bvh"),
     ];
     let subjects = subjects(b, &list, &children, defs)?;
     let o = Vec3::new(-10.0, 50.0, 50.0);

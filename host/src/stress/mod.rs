@@ -23,6 +23,7 @@ mod spawn;
 mod transforms;
 mod triangles;
 
+pub(crate) use bench::{box_mesh, header, unit_vector as bench_unit, uv_sphere, vec3f, Probe};
 pub use bench::{Bench, Line, Size};
 
 use anyhow::{bail, Result};
