@@ -101,6 +101,19 @@ struct RenderArgs {
     /// `[render] output`, else the scene's name with .png, in the current folder.
     #[arg(short, long, value_name = "FILE")]
     output: Option<PathBuf>,
+    /// Frame N (from 0) of an animation of `--frames` frames: the scene's
+    /// time [0, 1] (the `motion` class's keyframes) is split into equal
+    /// frames and this render's shutter is frame N's share of it (with
+    /// `--shutter-fraction` of the frame open, from its start).
+    #[arg(long, value_name = "N", requires = "frames")]
+    frame: Option<u32>,
+    /// Number of frames in the animation (with --frame).
+    #[arg(long, value_name = "F", requires = "frame")]
+    frames: Option<u32>,
+    /// Part of each frame's time the shutter is open (default 0.5, a film
+    /// camera's 180° shutter).
+    #[arg(long = "shutter-fraction", value_name = "F", requires = "frame")]
+    shutter_fraction: Option<f64>,
     /// Samples per pixel (same as --set render.spp=N).
     #[arg(long, value_name = "N")]
     spp: Option<u32>,
@@ -277,11 +290,28 @@ fn install_interrupt_handler() {
     }
 }
 
+/// The `render.shutter` override for frame `n` of `frames`: its share of
+/// the scene's time [0, 1], open for `fraction` of it from the frame's start.
+fn frame_shutter(n: u32, frames: u32, fraction: f64) -> Result<String> {
+    if frames == 0 || n >= frames {
+        anyhow::bail!("--frame {n} --frames {frames}: the frame must be below the frame count");
+    }
+    if !(0.0..=1.0).contains(&fraction) {
+        anyhow::bail!("--shutter-fraction {fraction}: must lie in [0, 1]");
+    }
+    let open = n as f64 / frames as f64;
+    let close = open + fraction / frames as f64;
+    Ok(format!("render.shutter=[{open:?}, {close:?}]"))
+}
+
 fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     let (pool, threads) = pool(a.threads)?;
     let mut sets = a.set.clone();
     if let Some(spp) = a.spp {
         sets.push(format!("render.spp={spp}"));
+    }
+    if let (Some(n), Some(f)) = (a.frame, a.frames) {
+        sets.push(frame_shutter(n, f, a.shutter_fraction.unwrap_or(0.5))?);
     }
     let time_limit = seconds("--time-limit", a.time_limit)?;
     let every = seconds("--checkpoint-every", a.checkpoint_every)?

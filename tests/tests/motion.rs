@@ -136,3 +136,37 @@ fn bad_keyframes_are_refused() {
         assert!(run.stderr.contains(key), "{bad}: {}", run.stderr);
     }
 }
+
+/// `--frame N --frames F` renders frame N's share of the scene's time: with
+/// a closed shutter (`--shutter-fraction 0`), exactly the pose at N / F.
+#[test]
+fn frames_split_the_scene_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.toml");
+    for (n, t) in [(0u32, 0.0f32), (1, 0.5)] {
+        std::fs::write(&path, scene(MOVING, [t, t], 4)).unwrap();
+        let (run, at_t) = render_file(&path, dir.path(), &[]);
+        assert!(run.ok, "{}", run.stderr);
+        let (run, frame) = render_file(
+            &path,
+            dir.path(),
+            &[
+                "--frame",
+                &n.to_string(),
+                "--frames",
+                "2",
+                "--shutter-fraction",
+                "0",
+            ],
+        );
+        assert!(run.ok, "{}", run.stderr);
+        assert_eq!(at_t.unwrap().data, frame.unwrap().data, "frame {n}");
+    }
+    let out = tempfile::tempdir().unwrap();
+    let (run, _) = render_file(&path, out.path(), &["--frame", "2", "--frames", "2"]);
+    assert!(
+        !run.ok && run.stderr.contains("--frame 2"),
+        "{}",
+        run.stderr
+    );
+}
