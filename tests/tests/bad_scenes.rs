@@ -269,3 +269,30 @@ fn integrator_of_the_wrong_type() {
         ],
     );
 }
+
+/// A DAG that doubles at each of 30 levels expands to 2^30 instances, which
+/// a `list` at each level would visit on every ray: refused with the limit
+/// named, before anything is created; raising the limit lets the check pass.
+#[test]
+fn exploding_instancing_is_refused() {
+    let mut s = String::from(
+        "[render]\nwidth = 4\nheight = 4\nroot = \"l30\"\nintegrator = \"normals\"\n\
+         [cameras.main]\nclass = \"pinhole\"\n[objects.l0]\nclass = \"sphere\"\n",
+    );
+    for k in 1..=30 {
+        s += &format!(
+            "[objects.l{k}]\nclass = \"list\"\nchildren = [\"l{p}\", \"l{p}\"]\n",
+            p = k - 1
+        );
+    }
+    let (run, img) = render_scene(&s, &[]);
+    assert!(!run.ok && img.is_none());
+    assert!(
+        run.stderr.contains("1.074e9") && run.stderr.contains("max_instances"),
+        "{}",
+        run.stderr
+    );
+    // 20 levels (about a million) are within the default limit.
+    let (run, _) = render_scene(&s.replace("root = \"l30\"", "root = \"l20\""), &[]);
+    assert!(!run.stderr.contains("max_instances"), "{}", run.stderr);
+}

@@ -24,6 +24,10 @@ struct Walk<'d> {
     reach: Reach,
     /// Levels each definition occupies (itself and below).
     depth: HashMap<String, usize>,
+    /// Leaf instances each definition expands to (1 for a primitive; the
+    /// sum over its children otherwise), in f64 so a doubling DAG of any
+    /// depth cannot overflow the count.
+    expansion: HashMap<String, f64>,
     /// The definitions on the current path, for cycle messages.
     path: Vec<String>,
 }
@@ -39,12 +43,28 @@ impl Reach {
                 first_transform: None,
             },
             depth: HashMap::new(),
+            expansion: HashMap::new(),
             path: Vec::new(),
         };
         let root = &desc.render.root;
         let d = w.visit(root, 0)?;
         if d > HIT_STACK_DEPTH {
             return Err(too_deep(root, &format!("{d} levels deep")));
+        }
+        let n = w.expansion.get(&root.object).copied().unwrap_or(1.0);
+        let max = desc.render.max_instances as f64;
+        if n > max {
+            return Err(SceneError::new(
+                ErrorKind::Invalid,
+                &root.object_origin,
+                &root.path,
+                "object",
+                format!(
+                    "the object DAG expands to {n:.3e} instances of primitives, more than \
+                     `[render] max_instances` ({max:.0}): a ray may have to visit each of them. \
+                     Raise the limit if the scene's aggregates cull them"
+                ),
+            ));
         }
         Ok(w.reach)
     }
@@ -110,6 +130,16 @@ impl Walk<'_> {
             deepest = deepest.max(self.visit(c, here)?);
         }
         self.path.pop();
+        let children = &desc.objects[&inst.object].children;
+        let expands = if children.is_empty() {
+            1.0
+        } else {
+            children
+                .iter()
+                .map(|c| self.expansion.get(&c.object).copied().unwrap_or(1.0))
+                .sum()
+        };
+        self.expansion.insert(inst.object.clone(), expands);
         let d = 1 + deepest;
         self.depth.insert(inst.object.clone(), d);
         Ok(d + transform_level)

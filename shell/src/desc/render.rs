@@ -8,10 +8,13 @@ use crate::error::SceneError;
 use crate::tree::{Node, Origin, Val};
 use std::collections::BTreeMap;
 
+/// Default `[render] max_instances`: 2^24 leaf instances.
+pub const DEFAULT_MAX_INSTANCES: u64 = 1 << 24;
+
 /// Largest image, in pixels (the f64 film takes 28 bytes a pixel: sums and sample count).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
-const KEYS: [&str; 13] = [
+const KEYS: [&str; 14] = [
     "width",
     "height",
     "spp",
@@ -25,6 +28,7 @@ const KEYS: [&str; 13] = [
     "filter",
     "sampler",
     "shutter",
+    "max_instances",
 ];
 const OBJ: &str = "render";
 
@@ -64,6 +68,9 @@ pub struct Render {
     /// The shutter interval `[open, close]` ⊂ [0, 1]: each camera sample's
     /// time is uniform in it (motion blur); `[t, t]` freezes time at t.
     pub shutter: [f32; 2],
+    /// Most leaf instances the object DAG may expand to (instancing
+    /// multiplies: a DAG that doubles at each of 30 levels is 2^30).
+    pub max_instances: u64,
 }
 
 /// A pixel filter, importance-sampled: each sample's film position is drawn
@@ -211,6 +218,7 @@ impl Render {
             filter: filter(r)?,
             stratified: sampler(r)?,
             shutter: shutter(r)?,
+            max_instances: int("max_instances", DEFAULT_MAX_INSTANCES as i64, 1, i64::MAX)? as u64,
         })
     }
 }
