@@ -208,3 +208,41 @@ children = [
         assert!(img.unwrap().data.iter().all(|&v| v == 0.0));
     }
 }
+
+/// Whitted's work bound: a glass ball in the house of mirrors spawns two
+/// rays at every glass hit; from `branch_depth` (8) on only the stronger is
+/// followed, so a pixel's tree stays under 2^8 rays per generation, and the
+/// full tree (`branch_depth = max_depth`) is larger.
+#[test]
+fn whitted_ray_trees_are_bounded() {
+    let scene = root().join("scenes/mirrors.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let count = |branch: u32| {
+        let b = format!("render.integrator.branch_depth={branch}");
+        let (run, _) = render_file(
+            &scene,
+            dir.path(),
+            &[
+                "--stats",
+                "--set",
+                "render.width=8",
+                "--set",
+                "render.height=8",
+                "--set",
+                "render.integrator.max_depth=24",
+                "--set",
+                "shaders.red.transmission=[1.0, 1.0, 1.0]",
+                "--set",
+                "shaders.red.diffuse=[0.0, 0.0, 0.0]",
+                "--set",
+                &b,
+            ],
+        );
+        assert!(run.ok, "{}", run.stderr);
+        let s = run.stats();
+        s["rays"]["reflection"].as_u64().unwrap() + s["rays"]["refraction"].as_u64().unwrap()
+    };
+    let (bounded, full) = (count(8), count(24));
+    assert!(bounded <= 64 * 256 * 25, "{bounded} rays");
+    assert!(full > bounded, "{full} vs {bounded}");
+}

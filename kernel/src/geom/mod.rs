@@ -7,6 +7,7 @@
 //! is accepted only when `t_min < t < t_max` and finite.
 
 mod offset;
+mod placed;
 mod real;
 mod slab;
 mod sphere;
@@ -14,6 +15,7 @@ mod triangle;
 pub mod vec;
 
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_between, spawn_ray_to, SHADOW_EPSILON};
+pub use placed::{abs_mat3, placed_point_error};
 pub use real::{gamma, max_of, min_of, Real};
 pub use slab::{slab, RayBoxPrecomp, SlabHit};
 pub use sphere::{

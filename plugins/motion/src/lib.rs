@@ -1,6 +1,6 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::geom::gamma;
+use rtk_kernel::geom::{abs_mat3, gamma, placed_point_error};
 use rtk_kernel::glam::{DQuat, DVec3, Mat3, Quat, Vec3};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::xform::{AxisAngle, Scale};
@@ -168,10 +168,6 @@ impl Motion {
     }
 }
 
-fn abs3(m: Mat3) -> Mat3 {
-    Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs())
-}
-
 impl Object for Motion {
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         if self.child.is_some() {
@@ -272,15 +268,20 @@ impl Object for Motion {
         let a = self.at(ray.time);
         c.local_geom(ctx, &Self::to_object(&a, ray), hit, level + 1, mask, out);
         if out.filled & geom_mask::POSITION != 0 {
-            // The transform plugin's bound (rule 8), at this time's matrix.
+            // Rule 8's bound, at this time's matrix.
             let p = out.p.v();
             let q = a.m * p + a.t;
-            let (abs_m, abs_inv) = (abs3(a.m), abs3(a.inv));
-            let g3 = gamma::<f32>(3);
-            let e = (1.0 + g3) * (abs_m * out.p_err.v()) + g3 * (abs_m * p.abs() + a.t.abs());
-            let back = gamma::<f32>(4) * (abs_inv * (q.abs() + e) + a.inv_t.abs());
+            let e = placed_point_error(
+                p,
+                out.p_err.v(),
+                q,
+                a.t,
+                abs_mat3(a.m),
+                abs_mat3(a.inv),
+                a.inv_t.abs(),
+            );
             out.p = q.into();
-            out.p_err = (e + abs_m * back).into();
+            out.p_err = e.into();
         }
         let normal = a.inv.transpose();
         if out.filled & geom_mask::GEOMETRIC_NORMAL != 0 {

@@ -1,6 +1,6 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::geom::gamma;
+use rtk_kernel::geom::{abs_mat3, gamma, placed_point_error};
 use rtk_kernel::glam::{Affine3A, DAffine3, DVec3, Mat3, Vec3};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::xform::{self, Step};
@@ -68,12 +68,8 @@ impl FromTransform for Transform {
             m: to_f32(&m),
             inv: to_f32(&inv),
             normal: normal.as_mat3(),
-            abs_m: Mat3::from_cols(abs.x_axis.abs(), abs.y_axis.abs(), abs.z_axis.abs()),
-            abs_inv: Mat3::from_cols(
-                abs_inv.x_axis.abs(),
-                abs_inv.y_axis.abs(),
-                abs_inv.z_axis.abs(),
-            ),
+            abs_m: abs_mat3(abs),
+            abs_inv: abs_mat3(abs_inv),
             abs_inv_t: inv.translation.as_vec3().abs(),
             flips: m.matrix3.determinant() < 0.0,
             child: None,
@@ -149,18 +145,16 @@ impl Object for Transform {
         if out.filled & geom_mask::POSITION != 0 {
             let p = out.p.v();
             let q = self.m.transform_point3(p);
-            // pbrt's bound for a transformed point with error: (γ₃+1)|M|e + γ₃(|M||p| + |t|).
-            let g3 = gamma::<f32>(3);
-            let e = (1.0 + g3) * (self.abs_m * out.p_err.v())
-                + g3 * (self.abs_m * p.abs() + Vec3::from(self.m.translation).abs());
-            // A ray spawned near q comes back through M⁻¹ in f32, which moves
-            // its origin in the child's space by up to γ₄(|M⁻¹||q| + |t⁻¹|)
-            // (the product and sum, and M⁻¹'s own rounding to f32): mapped
-            // out by |M|, the offset must clear that too, or the origin lands
-            // back inside the surface it left (docs/numerics.md X1: 1 in 1e6
-            // spawned rays at |p| ~ 4e4 under four levels).
-            let back = gamma::<f32>(4) * (self.abs_inv * (q.abs() + e) + self.abs_inv_t);
-            let e = e + self.abs_m * back;
+            let t = Vec3::from(self.m.translation);
+            let e = placed_point_error(
+                p,
+                out.p_err.v(),
+                q,
+                t,
+                self.abs_m,
+                self.abs_inv,
+                self.abs_inv_t,
+            );
             out.p = q.into();
             out.p_err = e.into();
         }
