@@ -246,3 +246,19 @@ fn whitted_ray_trees_are_bounded() {
     assert!(bounded <= 64 * 256 * 25, "{bounded} rays");
     assert!(full > bounded, "{full} vs {bounded}");
 }
+
+/// The `transform` class used directly keeps rule 1's coordinate limit.
+#[test]
+fn transform_class_refuses_translations_beyond_the_limit() {
+    let scene = sphere_scene("class = \"flat\"", "[objects.moved]\nclass = \"transform\"\nsteps = [{ translate = [2e12, 0.0, 0.0] }]\nchildren = [\"ball\"]\n")
+        .replace("{ object = \"ball\", shader = \"s\" }", "{ object = \"moved\", shader = \"s\" }");
+    let (run, img) = render_scene(&scene, &[]);
+    assert!(!run.ok && img.is_none());
+    assert!(
+        run.stderr.contains("objects.moved")
+            && run.stderr.contains("steps")
+            && run.stderr.contains("1e12"),
+        "{}",
+        run.stderr
+    );
+}

@@ -10,6 +10,8 @@ use rtk_kernel::*;
 struct Params {
     #[serde(default = "depth")]
     max_depth: u32,
+    #[serde(default = "depth")]
+    branch_depth: u32,
     #[serde(default = "one")]
     light_samples: u32,
     #[serde(default = "one")]
@@ -35,6 +37,9 @@ const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 struct Distributed {
     max_depth: u32,
+    /// From this generation on, only the stronger of a mirror and a
+    /// refraction ray is followed (whitted's work bound).
+    branch_depth: u32,
     light_samples: u32,
     glossy_samples: u32,
 }
@@ -77,6 +82,7 @@ impl Plugin for Distributed {
         }
         Ok(Distributed {
             max_depth: p.max_depth,
+            branch_depth: p.branch_depth,
             light_samples: p.light_samples,
             glossy_samples: p.glossy_samples,
         })
@@ -210,15 +216,26 @@ impl Distributed {
         }
         // Direct light, soft shadows from area lights.
         l = l.plus(self.direct(ctx, scene, ray, &g, &m, wo));
-        // The delta lobes, as whitted follows them (through `trace`).
-        for (want, kind) in SPECULAR_LOBES {
+        // The delta lobes, as whitted follows them (through `trace`), and
+        // with its work bound: from `branch_depth` on, only the stronger.
+        let mut rays = [None, None];
+        for (i, (want, kind)) in SPECULAR_LOBES.into_iter().enumerate() {
             if lobes & want != want {
                 continue;
             }
             if let Some(s) = m.sample(ctx, &g, wo, [0.5, 0.5], want) {
-                let r = spawn_ray(&g, s.wi.v(), ray);
-                l = l.plus(s.weight.times(scene.trace(ctx, &r, kind)));
+                rays[i] = Some((s, kind));
             }
+        }
+        if ray.generation >= self.branch_depth {
+            if let [Some((a, _)), Some((b, _))] = &rays {
+                let strength = |w: Color| w.r.max(w.g).max(w.b);
+                rays[usize::from(strength(b.weight) < strength(a.weight))] = None;
+            }
+        }
+        for (s, kind) in rays.into_iter().flatten() {
+            let r = spawn_ray(&g, s.wi.v(), ray);
+            l = l.plus(s.weight.times(scene.trace(ctx, &r, kind)));
         }
         // Glossy lobes: rays distributed by the material's own sampling.
         if lobes & lobe::GLOSSY != 0 && self.glossy_samples > 0 {

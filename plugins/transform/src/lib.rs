@@ -40,6 +40,11 @@ impl Plugin for Transform {
     type Params = Params;
 
     fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
+        let key = if p.matrix.is_some() {
+            "matrix"
+        } else {
+            "steps"
+        };
         let m = match (p.matrix, p.steps) {
             (Some(m), None) => {
                 let a = xform::matrix_from_rows("matrix", &m)?;
@@ -49,6 +54,16 @@ impl Plugin for Transform {
             (None, Some(s)) => xform::compose("steps", &s)?,
             _ => return Err(PluginError::msg("give exactly one of `matrix` and `steps`")),
         };
+        // Rule 1's coordinate limit, as instance transforms have it.
+        if m.translation.abs().max_element() > 1e12 {
+            return Err(PluginError::key(
+                key,
+                format!(
+                    "moves the child by {:e}, beyond the ±1e12 rtk handles (docs/numerics.md rule 1)",
+                    m.translation.abs().max_element()
+                ),
+            ));
+        }
         // Placed in the renderer's space (docs/numerics.md X3): the shell
         // creates this object's child unshifted, so the matrix absorbs the
         // world origin, in f64.
