@@ -19,3 +19,11 @@ pub const DEFAULT_INTEGRATOR: &str = "whitted";
 /// (they subtract `[render] origin` in f64 themselves): the shell creates
 /// their children unshifted, as below any instance transform.
 pub const PLACE_THEIR_CHILD: [&str; 2] = [INSTANCE_TRANSFORM, "motion"];
+
+/// Not a plugin: a macro group, which the shell expands. A definition of
+/// this class takes only `children`; every instance of it splices those
+/// children into its parent, each transform composed with the instance's
+/// and the instance's shader bound where a child binds none. The parent's
+/// aggregate then builds over the members directly: a group costs no
+/// level, no object and no query.
+pub const GROUP: &str = "group";

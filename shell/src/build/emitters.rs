@@ -196,7 +196,7 @@ impl Builder<'_> {
             };
         }
         let children_shifted = child_shifted;
-        for c in &od.children {
+        for c in &super::objects::expand_groups(desc, &od.children) {
             self.walk(c, m, children_shifted, seen, out)?;
         }
         Ok(())
@@ -204,7 +204,7 @@ impl Builder<'_> {
 
     fn any_emitter_below(&mut self, name: &str) -> Result<bool, SceneError> {
         let desc = self.desc;
-        for c in &desc.objects[name].children {
+        for c in &super::objects::expand_groups(desc, &desc.objects[name].children) {
             let data = self.bindings(c)?;
             let emits = self
                 .shaders

@@ -95,6 +95,23 @@ fn build_world(
     registry: &mut Registry,
     parallel: &dyn Parallel,
 ) -> Result<World, SceneError> {
+    let root = &desc.render.root;
+    if desc
+        .objects
+        .get(&root.object)
+        .is_some_and(|o| o.def.class == rtk_kernel::classes::GROUP)
+    {
+        return Err(SceneError::invalid(
+            &root.object_origin,
+            &root.path,
+            "object",
+            format!(
+                "`{}` is a group, which is expanded into the object instancing it: the root \
+                 must be an object (a `list` or an aggregate over the group)",
+                root.object
+            ),
+        ));
+    }
     let reach = reach::Reach::walk(&desc)?;
     let t0 = Instant::now();
     let needs::Loaded { plugins, accel } = needs::load(&desc, &reach, registry)?;
@@ -186,7 +203,7 @@ fn environment(desc: &Desc, lights: &[Light]) -> Result<Option<usize>, SceneErro
                     &d.class_origin,
                     d.path(),
                     "class",
-                    "an environment light and `[render] background` both say what rays that                      leave the scene find; remove the background",
+                    "an environment light and `[render] background` both say what rays that leave the scene find; remove the background",
                 ));
             }
             Ok(Some(i))

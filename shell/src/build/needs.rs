@@ -47,6 +47,7 @@ fn needs(desc: &Desc, reach: &Reach) -> Vec<Need> {
         reach
             .objects
             .iter()
+            .filter(|o| desc.objects[*o].def.class != rtk_kernel::classes::GROUP)
             .map(|o| def_need(&desc.objects[o].def, PluginKind::Object)),
     );
     if let Some(inst) = &reach.first_transform {
@@ -92,6 +93,9 @@ fn accel_needs(
     let (mut accel, mut needs) = (BTreeMap::new(), Vec::new());
     for o in &reach.objects {
         let od = &desc.objects[o];
+        if od.def.class == rtk_kernel::classes::GROUP {
+            continue;
+        }
         let offers = matches!(
             registry.loaded_class(&od.def.class).map(|p| p.module),
             Some(Module::Object(m)) if m.prim_count().is_some()

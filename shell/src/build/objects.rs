@@ -235,13 +235,13 @@ impl<'a> Builder<'a> {
         // which absorbs the shift (its plugin subtracts the origin it is given).
         let children_shifted =
             shifted && !rtk_kernel::classes::PLACE_THEIR_CHILD.contains(&def.class.as_str());
-        for inst in &od.children {
-            let child = self.instance(inst, flattens, children_shifted)?;
-            let data = self.bindings(inst)?;
+        for inst in expand_groups(desc, &od.children) {
+            let child = self.instance(&inst, flattens, children_shifted)?;
+            let data = self.bindings(&inst)?;
             let t = Instant::now();
             let added = b.add_child(&child, data);
             self.create_time += t.elapsed();
-            added.map_err(|e| child_refused(od, inst, e))?;
+            added.map_err(|e| child_refused(od, &inst, e))?;
         }
         let o = self
             .prepared(b)
@@ -301,6 +301,41 @@ impl<'a> Builder<'a> {
         self.create_time += t.elapsed();
         s.map_err(|e| call_error(def, attrs, "its parameters", e))
     }
+}
+
+/// `children` with every instance of a macro group (class
+/// [`GROUP`](rtk_kernel::classes::GROUP)) replaced by the group's own
+/// children, recursively: each member's transform composed after the
+/// instance's (`M_instance · M_member`, in f64), the instance's shader (and
+/// attributes) bound where the member binds none (the innermost binding
+/// wins), and a path that names both (`objects.a.children[1] > objects.g.children[0]`).
+pub(crate) fn expand_groups(desc: &Desc, children: &[Instance]) -> Vec<Instance> {
+    let mut out = Vec::with_capacity(children.len());
+    for inst in children {
+        let od = &desc.objects[&inst.object];
+        if od.def.class != rtk_kernel::classes::GROUP {
+            out.push(inst.clone());
+            continue;
+        }
+        for m in expand_groups(desc, &od.children) {
+            let transform = match (inst.transform, m.transform) {
+                (Some(a), Some(b)) => Some(a * b),
+                (a, b) => a.or(b),
+            };
+            let (shader, attributes) = match &m.shader {
+                Some(_) => (m.shader.clone(), m.attributes.clone()),
+                None => (inst.shader.clone(), inst.attributes.clone()),
+            };
+            out.push(Instance {
+                transform,
+                shader,
+                attributes,
+                path: format!("{} > {}", inst.path, m.path),
+                ..m
+            });
+        }
+    }
+    out
 }
 
 /// A plugin's error mapped back to the definition's table (or to an attribute

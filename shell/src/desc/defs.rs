@@ -154,6 +154,22 @@ impl ObjDef {
     /// Read `[objects.NAME]`: the definition and its `children` instances.
     pub(crate) fn read(name: &str, n: &Node) -> Result<ObjDef, SceneError> {
         let def = Def::read("objects", name, n, &["children", "accel"])?;
+        if def.class == rtk_kernel::classes::GROUP {
+            // A macro group is the shell's: nothing for a plugin to read.
+            let extra = match &n.value {
+                Val::Table(t) => t.iter().find(|(k, _, _)| k != "class" && k != "children"),
+                _ => None,
+            };
+            if let Some((key, origin, _)) = extra {
+                return Err(SceneError::invalid(
+                    origin,
+                    def.path(),
+                    key.as_str(),
+                    "a group takes only `children` (it is expanded into each parent that \
+                     instances it)",
+                ));
+            }
+        }
         let accel = n
             .get("accel")
             .map(|a| {
