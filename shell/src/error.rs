@@ -31,7 +31,7 @@ pub enum ErrorKind {
 }
 
 /// The scene file an error is located in: its path and text.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FileText {
     /// Path as given on the command line (messages show it unchanged).
     pub path: PathBuf,
@@ -68,14 +68,20 @@ impl SceneError {
         key: impl Into<String>,
         message: impl Into<String>,
     ) -> Self {
+        // A value from an included file carries its file: the error is
+        // located there, whatever file the caller attaches later.
+        let (origin, file) = match origin {
+            Origin::Included(f, r) => (Origin::File(r.clone()), Some(FileText::clone(f))),
+            o => (o.clone(), None),
+        };
         SceneError {
             kind,
-            origin: origin.clone(),
+            origin,
             object: object.into(),
             key: key.into(),
             message: message.into(),
             notes: Vec::new(),
-            file: None,
+            file,
         }
     }
 

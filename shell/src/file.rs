@@ -1,7 +1,7 @@
 //! A scene file: its text, its spanned tree, and `--set` overrides.
 
 use crate::error::{ErrorKind, FileText, SceneError};
-use crate::tree::{self, Node, Origin};
+use crate::tree::{self, Node, Origin, Val};
 use std::path::{Path, PathBuf};
 
 /// Largest scene file read: 64 MiB. A scene is text that names its bulk
@@ -12,19 +12,97 @@ pub const MAX_SCENE_BYTES: u64 = 64 << 20;
 /// The sections of a scene file, in the order they are documented.
 pub const SECTIONS: [&str; 5] = ["render", "cameras", "lights", "shaders", "objects"];
 
+/// Most nested `include`s: deeper is a mistake (or a loop the path check
+/// could not see), not a scene.
+pub const MAX_INCLUDE_DEPTH: usize = 16;
+
 /// A scene file: its text and its spanned tree.
 #[derive(Debug, Clone)]
 pub struct SceneFile {
     /// Path and text (errors are located in it).
     pub text: FileText,
-    /// Parsed tree.
+    /// Parsed tree, with every included file's tables merged in.
     pub root: Node,
+    /// The files `include` named, as resolved, with where each is named
+    /// (`--safe` checks them).
+    pub includes: Vec<(PathBuf, Origin)>,
 }
 
 impl SceneFile {
-    /// Read and parse a scene file: a regular file of at most
-    /// [`MAX_SCENE_BYTES`], in UTF-8.
+    /// Read and parse a scene file (a regular file of at most
+    /// [`MAX_SCENE_BYTES`], in UTF-8) and the files it includes: a
+    /// top-level `include = "file.toml"` or `include = ["a.toml", ...]`
+    /// merges their sections into this one (a definition given twice is an
+    /// error; paths relative to the including file; loops refused). Errors
+    /// inside an included file name that file and its line.
     pub fn read(path: &Path) -> Result<Self, SceneError> {
+        let mut f = Self::read_one(path)?;
+        let mut stack = vec![canonical(path)];
+        f.resolve_includes(&mut stack)?;
+        Ok(f)
+    }
+
+    /// Merge the files this one's `include` names, recursively.
+    fn resolve_includes(&mut self, stack: &mut Vec<PathBuf>) -> Result<(), SceneError> {
+        let here = self.text.clone();
+        let Some((origin, node)) = take_key(&mut self.root, "include") else {
+            return Ok(());
+        };
+        let bad = |o: &Origin, m: String| SceneError::invalid(o, "include", "", m).in_file(&here);
+        let names: Vec<(String, Origin)> = match node.value {
+            Val::Str(s) => vec![(s, node.origin)],
+            Val::Arr(items) => items
+                .into_iter()
+                .map(|n| match n.value {
+                    Val::Str(s) => Ok((s, n.origin)),
+                    v => Err(bad(
+                        &n.origin,
+                        format!("expected a path, found {}", v.type_name()),
+                    )),
+                })
+                .collect::<Result<_, _>>()?,
+            v => {
+                return Err(bad(
+                    &origin,
+                    format!(
+                        "expected a path or an array of paths, found {}",
+                        v.type_name()
+                    ),
+                ))
+            }
+        };
+        for (name, at) in names {
+            let path = self.dir().join(&name);
+            let key = canonical(&path);
+            if let Some(i) = stack.iter().position(|p| *p == key) {
+                let cycle: Vec<String> = stack[i..]
+                    .iter()
+                    .chain(std::iter::once(&key))
+                    .map(|p| p.display().to_string())
+                    .collect();
+                return Err(bad(&at, format!("include loop: {}", cycle.join(" -> "))));
+            }
+            if stack.len() >= MAX_INCLUDE_DEPTH {
+                return Err(bad(
+                    &at,
+                    format!("includes nested more than {MAX_INCLUDE_DEPTH} deep"),
+                ));
+            }
+            let mut inner = Self::read_one(&path)?;
+            stack.push(key);
+            inner.resolve_includes(stack)?;
+            stack.pop();
+            self.includes.push((path, at.clone()));
+            self.includes.append(&mut inner.includes);
+            let file = std::sync::Arc::new(inner.text.clone());
+            let root = std::mem::replace(&mut inner.root, Node::empty_table()).into_included(&file);
+            merge(&mut self.root, root).map_err(|e| e.in_file(&here))?;
+        }
+        Ok(())
+    }
+
+    /// Read and parse one file.
+    fn read_one(path: &Path) -> Result<Self, SceneError> {
         let io_error = |msg: String| {
             SceneError::new(ErrorKind::Io, &Origin::Whole, "", "", msg).in_file(&FileText {
                 path: path.to_path_buf(),
@@ -61,7 +139,11 @@ impl SceneFile {
             src: src.into(),
         };
         match tree::parse(&text.src) {
-            Ok(root) => Ok(SceneFile { text, root }),
+            Ok(root) => Ok(SceneFile {
+                text,
+                root,
+                includes: Vec::new(),
+            }),
             Err((msg, span)) => Err(SceneError::new(
                 ErrorKind::Syntax,
                 &Origin::File(span.unwrap_or(0..0)),
@@ -155,6 +237,65 @@ impl SceneFile {
             _ => PathBuf::from("."),
         }
     }
+}
+
+/// The path with links and `..` resolved where it exists (to recognise a
+/// file included twice under two names), else as given.
+fn canonical(p: &Path) -> PathBuf {
+    p.canonicalize().unwrap_or_else(|_| p.to_path_buf())
+}
+
+/// Remove a top-level key, returning its key origin and value.
+fn take_key(root: &mut Node, key: &str) -> Option<(Origin, Node)> {
+    let Val::Table(t) = &mut root.value else {
+        return None;
+    };
+    let i = t.iter().position(|(k, _, _)| k == key)?;
+    let (_, o, n) = t.remove(i);
+    Some((o, n))
+}
+
+/// Merge an included file's top level into the scene's: sections are
+/// joined, and a definition (or `[render]` key) given in both is an error
+/// located at the second.
+fn merge(into: &mut Node, from: Node) -> Result<(), SceneError> {
+    let (Val::Table(dst), Val::Table(src)) = (&mut into.value, from.value) else {
+        return Ok(());
+    };
+    for (section, origin, node) in src {
+        let Some(pos) = dst.iter().position(|(k, _, _)| *k == section) else {
+            dst.push((section, origin, node));
+            continue;
+        };
+        let existing = &mut dst[pos].2;
+        match (&mut existing.value, node.value) {
+            (Val::Table(a), Val::Table(b)) => {
+                for (k, ko, v) in b {
+                    if a.iter().any(|(k2, _, _)| *k2 == k) {
+                        return Err(SceneError::invalid(
+                            &ko,
+                            format!("{section}.{k}"),
+                            "",
+                            format!("`{section}.{k}` is defined both here and in the including file"),
+                        ));
+                    }
+                    a.push((k, ko, v));
+                }
+            }
+            (_, v) => {
+                return Err(SceneError::invalid(
+                    &origin,
+                    section.clone(),
+                    "",
+                    format!(
+                        "`{section}` is given both here and in the including file, not both as tables ({})",
+                        v.type_name()
+                    ),
+                ))
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Why [`read_regular_file`] refused or failed.

@@ -35,6 +35,16 @@ fn check_desc(file: &SceneFile, desc: &Desc) -> Result<(), SceneError> {
         scene_dir: resolved(&base),
         cwd: resolved(&cwd),
     };
+    for (path, origin) in &file.includes {
+        if !roots.inside(&cwd.join(path)) {
+            return Err(SceneError::invalid(
+                origin,
+                "include",
+                "",
+                format!("--safe: {}", roots.outside(&path.display().to_string())),
+            ));
+        }
+    }
     if let (Some(out), Some(n)) = (&desc.render.output, output_node(file)) {
         roots.check_output(out, n)?;
     }

@@ -16,6 +16,42 @@ pub enum Origin {
     CommandLine(String),
     /// The file as a whole (it could not be read, say).
     Whole,
+    /// A byte range of a file the scene includes (`include`).
+    Included(std::sync::Arc<crate::error::FileText>, Range<usize>),
+}
+
+impl Node {
+    /// An empty table with no origin of its own.
+    pub(crate) fn empty_table() -> Node {
+        Node {
+            origin: Origin::Whole,
+            value: Val::Table(Vec::new()),
+        }
+    }
+
+    /// Mark every origin in this tree (keys included) as a range of the
+    /// included file `file`.
+    pub(crate) fn into_included(mut self, file: &std::sync::Arc<crate::error::FileText>) -> Node {
+        fn walk(n: &mut Node, f: &std::sync::Arc<crate::error::FileText>) {
+            if let Origin::File(r) = &n.origin {
+                n.origin = Origin::Included(f.clone(), r.clone());
+            }
+            match &mut n.value {
+                Val::Arr(a) => a.iter_mut().for_each(|c| walk(c, f)),
+                Val::Table(t) => {
+                    for (_, o, c) in t.iter_mut() {
+                        if let Origin::File(r) = o {
+                            *o = Origin::Included(f.clone(), r.clone());
+                        }
+                        walk(c, f);
+                    }
+                }
+                _ => {}
+            }
+        }
+        walk(&mut self, file);
+        self
+    }
 }
 
 /// A value with its origin.

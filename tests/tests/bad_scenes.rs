@@ -296,3 +296,85 @@ fn exploding_instancing_is_refused() {
     let (run, _) = render_scene(&s.replace("root = \"l30\"", "root = \"l20\""), &[]);
     assert!(!run.stderr.contains("max_instances"), "{}", run.stderr);
 }
+
+/// `include`: the included files' sections merge into the scene; an error
+/// inside one names that file and line; loops, definitions given twice and
+/// (with --safe) files outside the scene's folder are refused.
+#[test]
+fn includes_merge_and_report_their_own_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let parts = dir.path().join("parts");
+    std::fs::create_dir(&parts).unwrap();
+    let write = |p: &std::path::Path, s: &str| std::fs::write(p, s).unwrap();
+    write(
+        &dir.path().join("main.toml"),
+        "include = [\"parts/camera.toml\", \"parts/ball.toml\"]\n[render]\nwidth = 8\nheight = 8\nroot = \"world\"\nintegrator = \"normals\"\n[objects.world]\nclass = \"list\"\nchildren = [\"ball\"]\n",
+    );
+    write(
+        &parts.join("camera.toml"),
+        "[cameras.main]\nclass = \"pinhole\"\n",
+    );
+    write(
+        &parts.join("ball.toml"),
+        "include = \"more.toml\"\n[objects.ball]\nclass = \"sphere\"\nradius = 1.0\n",
+    );
+    write(
+        &parts.join("more.toml"),
+        "[shaders.unused]\nclass = \"lambert\"\n",
+    );
+    let main = dir.path().join("main.toml");
+    let out = tempfile::tempdir().unwrap();
+    let (run, whole) = render_file(&main, out.path(), &[]);
+    assert!(run.ok, "{}", run.stderr);
+    // The same scene in one file renders the same image.
+    let (run, single) = render_scene(&GOOD.replace("center = [0.0, 0.0, 0.0]\n", ""), &[]);
+    assert!(run.ok, "{}", run.stderr);
+    assert_eq!(whole.unwrap().data, single.unwrap().data);
+
+    let fails = |what: &str, needles: &[&str]| {
+        let out = tempfile::tempdir().unwrap();
+        let (run, img) = render_file(&main, out.path(), &[]);
+        assert!(!run.ok && img.is_none(), "{what} accepted");
+        for n in needles {
+            assert!(
+                run.stderr.contains(n),
+                "{what}: missing {n:?} in {}",
+                run.stderr
+            );
+        }
+    };
+    write(
+        &parts.join("ball.toml"),
+        "include = \"more.toml\"\n[objects.ball]\nclass = \"sphere\"\nradius = -1.0\n",
+    );
+    fails("a bad value", &["ball.toml:4:10", "objects.ball", "radius"]);
+    write(
+        &parts.join("ball.toml"),
+        "include = \"../main.toml\"\n[objects.ball]\nclass = \"sphere\"\n",
+    );
+    fails("a loop", &["ball.toml:1:11", "include loop"]);
+    write(
+        &parts.join("ball.toml"),
+        "[objects.ball]\nclass = \"sphere\"\n[objects.world]\nclass = \"list\"\n",
+    );
+    fails(
+        "a definition twice",
+        &["ball.toml:3:10", "objects.world", "defined both"],
+    );
+    let elsewhere = tempfile::tempdir().unwrap();
+    let outside = elsewhere.path().join("shaders.toml");
+    write(&outside, "[shaders.x]\nclass = \"lambert\"\n");
+    write(
+        &parts.join("ball.toml"),
+        &format!(
+            "include = {:?}\n[objects.ball]\nclass = \"sphere\"\n",
+            outside.display().to_string()
+        ),
+    );
+    let out = tempfile::tempdir().unwrap();
+    let (run, _) = render_file(&main, out.path(), &[]);
+    assert!(run.ok, "{}", run.stderr);
+    let out = tempfile::tempdir().unwrap();
+    let (run, _) = render_file(&main, out.path(), &["--safe"]);
+    assert!(!run.ok && run.stderr.contains("--safe"), "{}", run.stderr);
+}
