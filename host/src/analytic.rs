@@ -63,7 +63,11 @@ impl Analytic {
                 if !args.keyed.is_empty() {
                     bail!("takes a colour R,G,B or a value V, not keys");
                 }
-                Analytic::Constant(rgb_of(&args.plain, "the colour")?)
+                let c = rgb_of(&args.plain, "the colour")?;
+                if c.iter().any(|v| *v < 0.0) {
+                    bail!("the colour must not be negative (it is a radiance)");
+                }
+                Analytic::Constant(c)
             }
             "" => bail!("no reference named; {}", known()),
             other => bail!("unknown reference `{other}`; {}", known()),
@@ -203,6 +207,8 @@ mod tests {
             ("constant:", "1 or 3 numbers"),
             ("constant:x", "`x` is not a finite number"),
             ("constant:nan", "not a finite number"),
+            ("constant:-1", "must not be negative"),
+            ("constant:1,-0.5,1", "must not be negative"),
             ("constant:v=1", "not keys"),
         ] {
             let e = format!("{:#}", Analytic::parse(spec).unwrap_err());

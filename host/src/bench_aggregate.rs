@@ -96,6 +96,9 @@ fn thin(rays: Vec<RayRec>, n: Option<usize>) -> Vec<RayRec> {
 
 /// Run `rtk bench-aggregate`.
 pub fn run(a: BenchArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> Result<()> {
+    if a.max_rays == Some(0) {
+        bail!("--rays must be at least 1 (leave it out to trace all 2^20 rays of each set)");
+    }
     let mut classes = vec![a.name.clone()];
     for c in &a.against {
         let c = c.trim();

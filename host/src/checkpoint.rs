@@ -224,16 +224,21 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
     };
     if header.filter > 3
         || header.sampler > 1
+        || !(1..=65536).contains(&header.width)
+        || !(1..=65536).contains(&header.height)
+        || header.width as u64 * header.height as u64 > rtk_shell::desc::MAX_PIXELS
+        || !(1..=1 << 24).contains(&header.spp)
         || rect.x0 >= rect.x1
         || rect.y0 >= rect.y1
         || rect.x1 > header.width
         || rect.y1 > header.height
     {
         bail!(
-            "{}: a damaged film header (image {}x{}, rectangle {rect})",
+            "{}: a damaged film header (image {}x{}, {} spp, rectangle {rect})",
             path.display(),
             header.width,
-            header.height
+            header.height,
+            header.spp
         );
     }
     let want = HEADER_BYTES + rect.len() as u64 * PIXEL_BYTES;
@@ -255,6 +260,12 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
             f64::from_bits(u64_at(&px, 16)),
         ];
         *c = u32_at(&px, 24);
+        if !s.iter().all(|x| x.is_finite()) {
+            bail!(
+                "{}: a pixel's sum is not a finite number: damaged",
+                path.display()
+            );
+        }
         if *c > header.spp {
             bail!(
                 "{}: a pixel has {} samples, more than the film's {} spp: damaged",

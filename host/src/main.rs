@@ -238,12 +238,22 @@ impl Parallel for Pool<'_> {
     }
 }
 
-/// The rendering pool: `threads` threads (default: all cores).
+/// Most rendering threads: starting the pool and the plugins' per-thread
+/// state grow faster than linearly with the count (4096 threads take seconds
+/// to start, 100000 practically never finish).
+const MAX_THREADS: usize = 1024;
+
+/// The rendering pool: `threads` threads (default: all cores, at most
+/// [`MAX_THREADS`]).
 fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
-    let threads =
-        threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let threads = threads.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, |n| n.get().min(MAX_THREADS))
+    });
     if threads == 0 {
         bail!("--threads must be at least 1");
+    }
+    if threads > MAX_THREADS {
+        bail!("--threads must be at most {MAX_THREADS}, got {threads}");
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

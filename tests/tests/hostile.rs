@@ -495,8 +495,33 @@ fn file_cases() -> Vec<Case> {
         scene("trace_rays_from_dev_zero", GOOD, &["/dev/zero: cannot read the ray file: it is a device"]).command(&["trace", "{dir}/tri.obj", "--rays", "/dev/zero"]),
         scene("trace_scene_from_a_fifo", GOOD, &["pipe.toml: cannot read the scene file: it is a FIFO"]).with(Extra::Fifo("pipe.toml")).command(&["trace", "{dir}/pipe.toml", "--rayset", "primary"]),
         scene("trace_mesh_from_a_fifo", GOOD, &["objects.mesh: key `file`", "pipe.ply: cannot read the mesh file: it is a FIFO"]).with(Extra::Fifo("pipe.ply")).command(&["trace", "{dir}/pipe.ply", "--rayset", "primary"]),
+        edit("bicubic_file_is_a_fifo", "class = \"mesh\"\nfile = \"tri.obj\"", "class = \"bicubic\"\nfile = \"pipe.bpt\"", &["scene.toml:27:8", "objects.tri: key `file`: plugin `bicubic` refused to build", "pipe.bpt: it is a FIFO, not a regular file"]).with(Extra::Fifo("pipe.bpt")),
+        edit("bicubic_file_is_dev_zero", "class = \"mesh\"\nfile = \"tri.obj\"", "class = \"bicubic\"\nfile = \"/dev/zero\"", &["scene.toml:27:8", "objects.tri: key `file`", "cannot read /dev/zero: it is a device, not a regular file"]),
+        scene("merge_film_header_of_huge_size", GOOD, &["huge.rtkfilm: a damaged film header (image 4294967295x4294967295, 1 spp, rectangle 0,0,1,1)"]).with(Extra::Bytes("huge.rtkfilm", film(u32::MAX, u32::MAX, 1, f64::INFINITY))).command(&["merge", "{dir}/out.exr", "{dir}/huge.rtkfilm"]).refuse(&["panicked", "capacity overflow"]),
+        scene("merge_film_spp_zero", GOOD, &["z.rtkfilm: a damaged film header (image 1x1, 0 spp, rectangle 0,0,1,1)"]).with(Extra::Bytes("z.rtkfilm", film(1, 1, 0, 0.0))).command(&["merge", "{dir}/out.exr", "{dir}/z.rtkfilm"]),
+        scene("merge_film_with_a_nan_sum", GOOD, &["nan.rtkfilm: a pixel's sum is not a finite number: damaged"]).with(Extra::Bytes("nan.rtkfilm", film(1, 1, 1, f64::NAN))).command(&["merge", "{dir}/out.exr", "{dir}/nan.rtkfilm"]),
+        scene("resume_film_header_of_huge_size", GOOD, &["huge.rtkfilm: a damaged film header (image 4294967295x4294967295"]).with(Extra::Bytes("huge.rtkfilm", film(u32::MAX, u32::MAX, 1, 0.0))).args(&["--resume", "{dir}/huge.rtkfilm"]).refuse(&["panicked"]),
         with_key(mesh("obj_escape_in_file", "x.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \x1b[2J\n", &["x.obj: line 4: `\\u{1b}[2J` is not a vertex index"])),
     ]
+}
+
+/// A film file (docs/farm.md) of a `w` x `h` image holding its pixel
+/// (0, 0) alone, with `sum` in each channel and one sample.
+fn film(w: u32, h: u32, spp: u32, sum: f64) -> Vec<u8> {
+    let mut b = b"RTKFILM1".to_vec();
+    b.extend(0u64.to_le_bytes());
+    for v in [w, h, spp] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(0u64.to_le_bytes());
+    for v in [0u32, 0, 0, 0, 1, 1] {
+        b.extend(v.to_le_bytes());
+    }
+    for _ in 0..3 {
+        b.extend(sum.to_le_bytes());
+    }
+    b.extend(1u32.to_le_bytes());
+    b
 }
 
 /// Class 5: Messages: `--set`, terminal escapes, huge keys, the output checked
@@ -526,6 +551,9 @@ fn message_cases() -> Vec<Case> {
         edit("output_unwritable_found_before_rendering", "width = 8", "width = 8", &["output /proc/rtk-hostile.png: cannot write in the folder /proc"]).args(&["-o", "/proc/rtk-hostile.png", "--spp", "1000000", "--set", "render.width=4096", "--set", "render.height=4096"]).no_output(),
         edit("output_is_a_folder", "width = 8", "width = 8", &["output {dir}/sub.png: is a folder"]).with(Extra::Dir("sub.png")).args(&["-o", "{dir}/sub.png"]).no_output(),
         edit("output_folder_missing", "width = 8", "width = 8", &["output {dir}/no/x.png: the folder {dir}/no does not exist"]).args(&["-o", "{dir}/no/x.png"]).no_output(),
+        edit("threads_beyond_the_limit", "width = 8", "width = 8", &["--threads must be at most 1024, got 100000"]).args(&["--threads", "100000"]),
+        scene("bench_aggregate_zero_rays", GOOD, &["--rays must be at least 1"]).command(&["bench-aggregate", "bvh", "--mesh", "{dir}/tri.obj", "--rays", "0"]),
+        scene("converge_negative_constant_reference", GOOD, &["--analytic `constant:-1`: the colour must not be negative"]).command(&["converge", "{dir}/scene.toml", "--analytic", "constant:-1", "--out", "{dir}/cv"]),
         edit("output_without_format", "width = 8", "width = 8\noutput = \"picture\"", &["output picture: the file name must end in .png or .exr"]).no_output(),
     ]
 }

@@ -137,6 +137,33 @@ fn bad_keyframes_are_refused() {
     }
 }
 
+/// A keyframe scale beyond what f32 intersection handles is refused, as an
+/// instance transform's is (a scene once rendered a ball scaled by 1e30).
+#[test]
+fn keyframe_scales_beyond_1e12_are_refused() {
+    for (bad, msg) in [
+        (
+            "{ time = 0.0 }, { time = 1.0, scale = 1e13 }",
+            "key `keyframes[1].scale`: plugin `motion` refused its parameters: scales by 1.0e13, outside the 1e-12 to 1e12 rtk handles",
+        ),
+        (
+            "{ time = 0.0, scale = 1e-13 }",
+            "key `keyframes[0].scale`: plugin `motion` refused its parameters: scales by 1.0e-13, outside the 1e-12 to 1e12 rtk handles",
+        ),
+    ] {
+        let world = format!(
+            "[objects.moving]\nclass = \"motion\"\nchildren = [\"ball\"]\nkeyframes = [{bad}]\n[objects.world]\nclass = \"list\"\nchildren = [\"moving\"]\n"
+        );
+        let (run, img) = render_scene(&scene(&world, [0.0, 1.0], 1), &[]);
+        assert!(!run.ok && img.is_none(), "{bad} accepted");
+        assert!(
+            run.stderr.contains("scene.toml:25:") && run.stderr.contains("objects.moving") && run.stderr.contains(msg),
+            "{bad}: {}",
+            run.stderr
+        );
+    }
+}
+
 /// `--frame N --frames F` renders frame N's share of the scene's time: with
 /// a closed shutter (`--shutter-fraction 0`), exactly the pose at N / F.
 #[test]

@@ -170,14 +170,59 @@ impl Bicubic {
     }
 }
 
+/// Largest patch file read: 1 GiB (the most patches and vertices a file
+/// may declare, 2^24 each, take well under that as text).
+const MAX_FILE_BYTES: u64 = 1 << 30;
+
+/// Read a patch file through the host, bounded: only a regular file of at
+/// most [`MAX_FILE_BYTES`] (a FIFO would block, `/dev/zero` never end).
+fn read_patch_file(env: &Prepare, path: &std::path::Path) -> Result<Vec<u8>, PluginError> {
+    let cannot = |e: &dyn std::fmt::Display| {
+        PluginError::key("file", format!("cannot read {}: {e}", path.display()))
+    };
+    let meta = std::fs::metadata(path).map_err(|e| cannot(&e))?;
+    if !meta.is_file() {
+        #[cfg(unix)]
+        let special = {
+            use std::os::unix::fs::FileTypeExt;
+            let t = meta.file_type();
+            if t.is_fifo() {
+                Some("a FIFO")
+            } else if t.is_char_device() || t.is_block_device() {
+                Some("a device")
+            } else {
+                None
+            }
+        };
+        #[cfg(not(unix))]
+        let special: Option<&str> = None;
+        let kind = match special {
+            Some(k) => k,
+            None if meta.is_dir() => "a folder",
+            None => "a special file",
+        };
+        return Err(cannot(&format!("it is {kind}, not a regular file")));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(cannot(&format!(
+            "it is {} bytes, more than rtk's limit of {} GiB for a patch file",
+            meta.len(),
+            MAX_FILE_BYTES >> 30
+        )));
+    }
+    let bytes = env.read_file(path).map_err(|e| cannot(&e))?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(cannot(&"it grew beyond 1 GiB while it was read"));
+    }
+    Ok(bytes)
+}
+
 impl Object for Bicubic {
     fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
         let Some(path) = &self.file else {
             return Ok(());
         };
-        let bytes = env.read_file(path).map_err(|e| {
-            PluginError::key("file", format!("cannot read {}: {e}", path.display()))
-        })?;
+        let bytes = read_patch_file(env, path)?;
         let text = String::from_utf8_lossy(&bytes);
         let (idx, verts) = bpt::parse(&text)
             .map_err(|e| PluginError::key("file", format!("{}: {e}", path.display())))?;

@@ -86,6 +86,17 @@ impl Plugin for Motion {
                     "must be positive and finite, within a ratio of 1e7 between axes",
                 ));
             }
+            // As an instance's transform (docs/scene-format.md, Numbers): a
+            // child scaled beyond this overflows f32 or vanishes.
+            if s.max_element() > 1e12 || s.min_element() < 1e-12 {
+                return Err(PluginError::key(
+                    key("scale"),
+                    format!(
+                        "scales by {:.1e}, outside the 1e-12 to 1e12 rtk handles (docs/numerics.md rule 1)",
+                        if s.max_element() > 1e12 { s.max_element() } else { s.min_element() }
+                    ),
+                ));
+            }
             let r = match &k.rotate {
                 None => DQuat::IDENTITY,
                 Some(a) => {
