@@ -5,6 +5,7 @@ mod analytic;
 mod bench_aggregate;
 mod checkpoint;
 mod conform;
+mod conform_shader;
 mod converge;
 mod images;
 mod new;

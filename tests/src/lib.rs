@@ -106,6 +106,8 @@ pub fn fixtures_dir() -> &'static Path {
             "rtk_dropin",
             "-p",
             "rtk_brokenagg",
+            "-p",
+            "rtk_brokenshader",
             "--manifest-path",
         ])
         .arg(&manifest)

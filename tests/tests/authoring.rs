@@ -161,3 +161,35 @@ fn conform_names_the_check_a_broken_aggregate_fails() {
     assert!(r.stdout.contains("pass  nearest-hit"), "{}", r.stdout);
     assert!(r.stderr.contains("brokenagg"), "{}", r.stderr);
 }
+
+#[test]
+fn conform_passes_every_built_in_shader() {
+    for class in [
+        "lambert",
+        "phong",
+        "flat",
+        "conductor",
+        "dielectric",
+        "roughconductor",
+    ] {
+        let lib = bin_dir().join(format!("librtk_{class}.so"));
+        let r = conform(&lib);
+        assert!(r.ok, "{class}:\n{}\n{}", r.stdout, r.stderr);
+        assert!(r.stdout.contains("pass  energy"), "{}", r.stdout);
+        assert!(!r.stdout.contains("FAIL"), "{}", r.stdout);
+    }
+}
+
+#[test]
+fn conform_names_the_checks_a_broken_shader_fails() {
+    let r = conform(&fixtures_dir().join("librtk_brokenshader.so"));
+    assert!(!r.ok, "{}", r.stdout);
+    assert!(
+        r.stdout.contains("FAIL  pdf-matches-sample"),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("FAIL  pdf-integrates"), "{}", r.stdout);
+    assert!(r.stdout.contains("pass  energy"), "{}", r.stdout);
+    assert!(r.stderr.contains("brokenshader"), "{}", r.stderr);
+}

@@ -356,6 +356,43 @@ impl Shader {
         self.lobes
     }
 
+    /// BSDF value f(wo, wi) (tools such as `rtk conform`; integrators ask
+    /// through the scene's `Material`).
+    pub fn eval(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: Float3, wi: Float3) -> Color {
+        // SAFETY: the shader is live; the rest are references.
+        unsafe { (self.class.eval())(self.this, ctx, geom, &wo, &wi) }
+    }
+
+    /// Sample `wi` among `lobes`; `None` when there is no such lobe.
+    pub fn sample(
+        &self,
+        ctx: &mut TraceCtx,
+        geom: &LocalGeom,
+        wo: Float3,
+        u: [f32; 2],
+        lobes: u32,
+    ) -> Option<BsdfSample> {
+        let mut s = BsdfSample::default();
+        // SAFETY: as in `eval`.
+        unsafe { (self.class.sample())(self.this, ctx, geom, &wo, &u, lobes, &mut s) }.then_some(s)
+    }
+
+    /// The density `sample` draws `wi` with; `None` when the shader cannot
+    /// tell (or predates the entry).
+    pub fn pdf(
+        &self,
+        ctx: &mut TraceCtx,
+        geom: &LocalGeom,
+        wo: Float3,
+        wi: Float3,
+        lobes: u32,
+    ) -> Option<f32> {
+        let f = self.class.pdf()?;
+        // SAFETY: as in `eval`.
+        let p = unsafe { f(self.this, ctx, geom, &wo, &wi, lobes) };
+        (p >= 0.0).then_some(p)
+    }
+
     /// Radiance emitted towards `wo` (black unless the shader emits).
     #[inline]
     pub fn emitted(&self, ctx: &mut TraceCtx, geom: &LocalGeom, wo: Float3) -> Color {

@@ -1,0 +1,210 @@
+//! `rtk conform` for shader plugins: the material queries' contracts,
+//! checked by Monte Carlo on a surface facing +z, for a few outgoing
+//! directions (near the normal, at 45°, grazing) on both sides.
+//!
+//! - `finite`: no query returns NaN or infinity;
+//! - `energy`: the mean sample weight (f·|cos|/pdf) is at most 1, within
+//!   5 standard errors: a material reflects no more than it receives;
+//! - `weight-matches-eval`: for samples of non-delta lobes, the weight is
+//!   eval·|cos|/pdf (the integrator's estimate is consistent);
+//! - `pdf-matches-sample`: `pdf(wi)` is the density `sample` reported;
+//! - `pdf-integrates`: ∫ pdf dω over the sphere (uniform-sphere Monte Carlo)
+//!   equals the share of non-delta samples, within 5 standard errors: a
+//!   density that does not integrate biases MIS;
+//! - `reciprocity`: f(wo, wi) = f(wi, wo) for reflection, where the shader
+//!   has no transmission lobe.
+//!
+//! A shader that reports no density (`pdf` → `None`) skips the pdf checks,
+//! saying so: it is allowed, and the path tracer then does not weigh its
+//! samples by MIS.
+
+use crate::conform::Check;
+use anyhow::{anyhow, Result};
+use rtk_kernel::abi::{geom_mask, lobe, Float3, LocalGeom, ShaderModuleRef};
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::host::{CreateArgs, Shader};
+use rtk_kernel::sdk::shading::uniform_sphere;
+use rtk_kernel::{RngState, TraceCtx};
+
+/// The checks for shader class `class` from `module`, `n` samples each.
+pub fn checks(module: ShaderModuleRef, class: &str, n: usize) -> Result<Vec<Check>> {
+    let args = CreateArgs {
+        scene_dir: ".",
+        name: "shaders.conform",
+        image_width: 1,
+        image_height: 1,
+        origin: [0.0; 3],
+    };
+    let shader = Shader::create(module, "{}", &args)
+        .map_err(|e| anyhow!("`{class}` refused its default parameters: {e}"))?;
+    let mut ctx = TraceCtx::new(0, 1, 0);
+    let mut g = LocalGeom::EMPTY;
+    g.p = Vec3::ZERO.into();
+    g.ng = Vec3::Z.into();
+    g.ns = Vec3::Z.into();
+    g.dpdu = Vec3::X.into();
+    g.dpdv = Vec3::Y.into();
+    g.uv = [0.5, 0.5];
+    g.filled = geom_mask::ALL;
+    let f3 = |v: Vec3| -> Float3 { v.into() };
+    let transmits = shader.lobes() & lobe::TRANSMISSION != 0;
+    let mut rng = RngState::seeded(0x5ade);
+
+    let mut nonfinite = (0u64, String::new());
+    let mut energy = (true, String::new());
+    let mut weight_bad = (0u64, String::new());
+    let mut pdf_bad = (0u64, String::new());
+    let mut integral_bad = (true, String::new());
+    let mut recip_bad = (0u64, String::new());
+    let mut pdf_known = true;
+
+    for side in [1.0f32, -1.0] {
+        for theta in [0.15f32, 0.785, 1.45] {
+            let wo = Vec3::new(theta.sin(), 0.0, side * theta.cos());
+            let (mut sum, mut sum2, mut nonzero_share) = (0.0f64, 0.0f64, 0.0f64);
+            for k in 0..n {
+                // Stratified in the first number: the estimate converges faster.
+                let u = [(k as f32 + rng.next_f32()) / n as f32, rng.next_f32()];
+                let Some(s) = shader.sample(&mut ctx, &g, f3(wo), u, lobe::ALL) else {
+                    continue;
+                };
+                let w = s.weight;
+                if !(w.is_finite() && s.pdf.is_finite() && s.wi.v().is_finite()) {
+                    note(&mut nonfinite, || format!("sample at wo {wo:?} gave {s:?}"));
+                    continue;
+                }
+                let m = w.r.max(w.g).max(w.b) as f64;
+                sum += m;
+                sum2 += m * m;
+                if s.lobe & lobe::SPECULAR != 0 {
+                    continue;
+                }
+                nonzero_share += 1.0 / n as f64;
+                let wi = s.wi.v();
+                let f = shader.eval(&mut ctx, &g, f3(wo), f3(wi));
+                let cos = wi.z.abs();
+                if s.pdf > 0.0 && !f.is_black() {
+                    let expect = f.scale(cos / s.pdf);
+                    let rel = |a: f32, b: f32| (a - b).abs() <= 1e-3 * b.abs().max(1e-3);
+                    if !(rel(expect.r, w.r) && rel(expect.g, w.g) && rel(expect.b, w.b)) {
+                        note(&mut weight_bad, || {
+                            format!("wo {wo:?} wi {wi:?}: weight {w:?}, eval·cos/pdf {expect:?}")
+                        });
+                    }
+                }
+                match shader.pdf(&mut ctx, &g, f3(wo), f3(wi), lobe::ALL) {
+                    None => pdf_known = false,
+                    Some(p) if (p - s.pdf).abs() > 1e-3 * s.pdf.max(1e-3) => {
+                        note(&mut pdf_bad, || {
+                            format!("wo {wo:?} wi {wi:?}: pdf() {p}, sample's pdf {}", s.pdf)
+                        })
+                    }
+                    Some(_) => {}
+                }
+                // Reciprocity, for reflection pairs.
+                if !transmits && wi.z * wo.z > 0.0 {
+                    let back = shader.eval(&mut ctx, &g, f3(wi), f3(wo));
+                    let rel =
+                        |a: f32, b: f32| (a - b).abs() <= 1e-3 * a.abs().max(b.abs()).max(1e-6);
+                    if !(rel(back.r, f.r) && rel(back.g, f.g) && rel(back.b, f.b)) {
+                        note(&mut recip_bad, || {
+                            format!(
+                                "f(wo, wi) {f:?} but f(wi, wo) {back:?} for wo {wo:?} wi {wi:?}"
+                            )
+                        });
+                    }
+                }
+            }
+            let mean = sum / n as f64;
+            let se = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            if mean > 1.0 + 5.0 * se + 1e-3 && energy.0 {
+                energy = (
+                    false,
+                    format!(
+                        "at wo {wo:?} the mean weight is {mean:.4} ± {se:.4}: it creates energy"
+                    ),
+                );
+            }
+            // ∫ pdf dω by uniform directions: 4π·E[pdf].
+            if pdf_known {
+                let m = 4 * n;
+                let (mut s1, mut s2) = (0.0f64, 0.0f64);
+                for _ in 0..m {
+                    let wi = uniform_sphere([rng.next_f32(), rng.next_f32()]);
+                    let p = shader
+                        .pdf(&mut ctx, &g, f3(wo), f3(wi), lobe::ALL)
+                        .unwrap_or(0.0) as f64
+                        * 4.0
+                        * std::f64::consts::PI;
+                    s1 += p;
+                    s2 += p * p;
+                }
+                let mean = s1 / m as f64;
+                let se = ((s2 / m as f64 - mean * mean).max(0.0) / m as f64).sqrt();
+                // The share of non-delta samples is the mass the density covers.
+                if (mean - nonzero_share).abs() > 5.0 * se + 0.02 && integral_bad.0 {
+                    integral_bad = (
+                        false,
+                        format!(
+                            "at wo {wo:?}, ∫ pdf dω = {mean:.4} ± {se:.4}, but {nonzero_share:.4} of samples are not delta"
+                        ),
+                    );
+                }
+            }
+        }
+    }
+    let mut out = vec![
+        count_check("finite", &nonfinite),
+        Check {
+            name: "energy",
+            pass: energy.0,
+            detail: if energy.0 {
+                "mean weight ≤ 1 at every direction tried".into()
+            } else {
+                energy.1
+            },
+        },
+        count_check("weight-matches-eval", &weight_bad),
+    ];
+    if pdf_known {
+        out.push(count_check("pdf-matches-sample", &pdf_bad));
+        out.push(Check {
+            name: "pdf-integrates",
+            pass: integral_bad.0,
+            detail: if integral_bad.0 {
+                "∫ pdf dω matches the non-delta share at every direction tried".into()
+            } else {
+                integral_bad.1
+            },
+        });
+    } else {
+        out.push(Check {
+            name: "pdf",
+            pass: true,
+            detail: "the shader reports no density: not checked (no MIS for it)".into(),
+        });
+    }
+    if !transmits {
+        out.push(count_check("reciprocity", &recip_bad));
+    }
+    Ok(out)
+}
+
+fn note(slot: &mut (u64, String), msg: impl FnOnce() -> String) {
+    if slot.0 == 0 {
+        slot.1 = msg();
+    }
+    slot.0 += 1;
+}
+
+fn count_check(name: &'static str, slot: &(u64, String)) -> Check {
+    Check {
+        name,
+        pass: slot.0 == 0,
+        detail: if slot.0 == 0 {
+            "held on every sample".into()
+        } else {
+            format!("{} failures; first: {}", slot.0, slot.1)
+        },
+    }
+}
