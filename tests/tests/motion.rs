@@ -197,3 +197,35 @@ fn frames_split_the_scene_time() {
         run.stderr
     );
 }
+
+/// A pinhole camera with keyframes: a closed shutter at a keyframe's time
+/// sees exactly what a still camera at that pose sees; `--frame` moves it.
+#[test]
+fn camera_keyframes_pose_exactly_and_animate() {
+    let world = still([0.0, 0.0, 0.0], 0.0);
+    let fixed = |eye: &str| {
+        scene(&world, [0.0, 0.0], 4).replace("eye = [0.0, 0.0, 6.0]", &format!("eye = {eye}"))
+    };
+    let moving = |shutter: [f32; 2]| {
+        scene(&world, shutter, 4).replace(
+            "eye = [0.0, 0.0, 6.0]",
+            "keyframes = [{ time = 0.0, eye = [0.0, 0.0, 6.0], look_at = [0.0, 0.0, 0.0] }, { time = 1.0, eye = [2.0, 0.0, 6.0], look_at = [0.0, 0.0, 0.0] }]",
+        )
+    };
+    for (t, eye) in [(0.0f32, "[0.0, 0.0, 6.0]"), (1.0, "[2.0, 0.0, 6.0]")] {
+        let (run, a) = render_scene(&moving([t, t]), &[]);
+        assert!(run.ok, "{}", run.stderr);
+        let (run, b) = render_scene(&fixed(eye), &[]);
+        assert!(run.ok, "{}", run.stderr);
+        assert_eq!(a.unwrap().data, b.unwrap().data, "t = {t}");
+    }
+    // Frames differ as the camera moves.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.toml");
+    std::fs::write(&path, moving([0.0, 1.0])).unwrap();
+    let (run, f0) = render_file(&path, dir.path(), &["--frame", "0", "--frames", "4"]);
+    assert!(run.ok, "{}", run.stderr);
+    let (run, f3) = render_file(&path, dir.path(), &["--frame", "3", "--frames", "4"]);
+    assert!(run.ok, "{}", run.stderr);
+    assert_ne!(f0.unwrap().data, f3.unwrap().data);
+}

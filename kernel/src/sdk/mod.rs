@@ -155,10 +155,45 @@ impl Prepare<'_> {
         self.env.max_threads
     }
 
-    /// Read a whole file, telling the host (its `--stats` list the files read).
+    /// Read a whole file, telling the host (its `--stats` list the files
+    /// read). Only a regular file of at most [`MAX_FILE_BYTES`] is read: a
+    /// FIFO would block the build forever and `/dev/zero` would fill memory,
+    /// so both are refused, with a message saying what the path is.
     pub fn read_file(&self, path: &std::path::Path) -> std::io::Result<Vec<u8>> {
+        use std::io::{Error, ErrorKind, Read};
         shims::note_file(self.env, &path.to_string_lossy());
-        std::fs::read(path)
+        let meta = std::fs::metadata(path)?;
+        if !meta.is_file() {
+            let what = if meta.is_dir() {
+                "a folder"
+            } else {
+                "a device, FIFO or socket"
+            };
+            return Err(Error::new(
+                ErrorKind::InvalidInput,
+                format!("it is {what}, not a regular file"),
+            ));
+        }
+        if meta.len() > MAX_FILE_BYTES {
+            return Err(Error::new(
+                ErrorKind::InvalidInput,
+                format!(
+                    "it is {} bytes, more than the {MAX_FILE_BYTES} a plugin reads",
+                    meta.len()
+                ),
+            ));
+        }
+        let mut out = Vec::new();
+        std::fs::File::open(path)?
+            .take(MAX_FILE_BYTES + 1)
+            .read_to_end(&mut out)?;
+        if out.len() as u64 > MAX_FILE_BYTES {
+            return Err(Error::new(
+                ErrorKind::InvalidInput,
+                "it grew while being read",
+            ));
+        }
+        Ok(out)
     }
 
     /// Run `f(i)` for `i < n` on the host's thread pool (plugins must not start
@@ -167,6 +202,11 @@ impl Prepare<'_> {
         shims::parallel_for(self.env, n, f)
     }
 }
+
+/// Largest file [`Prepare::read_file`] reads: 4 GiB (a mesh of ~100 M
+/// triangles in binary PLY); larger inputs are refused rather than risk the
+/// machine's memory.
+pub const MAX_FILE_BYTES: u64 = 4 << 30;
 
 /// What every plugin has: parameters parsed from the scene (unknown keys
 /// refused with `#[serde(deny_unknown_fields)]`) and a constructor. One
