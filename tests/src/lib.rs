@@ -108,6 +108,12 @@ pub fn fixtures_dir() -> &'static Path {
             "rtk_brokenagg",
             "-p",
             "rtk_brokenshader",
+            "-p",
+            "rtk_brokennearest",
+            "-p",
+            "rtk_brokenbounds",
+            "-p",
+            "rtk_brokenrace",
             "--manifest-path",
         ])
         .arg(&manifest)

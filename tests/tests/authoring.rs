@@ -193,3 +193,30 @@ fn conform_names_the_checks_a_broken_shader_fails() {
     assert!(r.stdout.contains("pass  energy"), "{}", r.stdout);
     assert!(r.stderr.contains("brokenshader"), "{}", r.stderr);
 }
+
+/// Each broken fixture fails the check its defect breaks, by name: the
+/// first hit instead of the nearest, bounds too small, and a query counter
+/// incremented by a load and a store (a data race that shows only when
+/// threads query at once).
+#[test]
+fn conform_names_each_broken_fixtures_check() {
+    for (fixture, check, passes) in [
+        ("brokennearest", "nearest-hit", "any-hit"),
+        ("brokenbounds", "bounds-contain-hits", "nearest-hit"),
+        ("brokenrace", "concurrent-queries", "nearest-hit"),
+    ] {
+        let r = conform(&fixtures_dir().join(format!("librtk_{fixture}.so")));
+        assert!(!r.ok, "{fixture}: {}", r.stdout);
+        assert!(
+            r.stdout.contains(&format!("FAIL  {check}")),
+            "{fixture}: {}",
+            r.stdout
+        );
+        assert!(
+            r.stdout.contains(&format!("pass  {passes}")),
+            "{fixture}: {}",
+            r.stdout
+        );
+        assert!(r.stderr.contains(fixture), "{}", r.stderr);
+    }
+}
