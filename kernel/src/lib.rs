@@ -37,16 +37,17 @@ mod values;
 pub mod xform;
 
 pub use abi::values::{
-    geom_mask, light_flag, lobe, ray_kind, Bounds3, BsdfSample, CameraSample, Color, Float3, Hit,
-    HitEntry, InstanceData, LightSample, LocalGeom, Ray, SurfaceSample, HIT_STACK_DEPTH, NONE_ID,
+    bound_kind, geom_mask, light_flag, lobe, ray_kind, BoundSphere, Bounds3, BsdfSample,
+    CameraSample, Color, Float3, Hit, HitEntry, InstanceData, LightSample, LocalGeom, Ray,
+    SlabBounds, SurfaceSample, HIT_STACK_DEPTH, NONE_ID, SLAB_COUNT, SLAB_NORMALS,
 };
 pub use abi::{RngState, Stats, TraceCtx};
 pub use glam;
 pub use sdk::params::{self, parse_params};
 pub use sdk::{
-    Camera, Child, Env, Environment, FlattensPrimitives, FromTransform, Integrator, Light,
-    Material, Object, Plugin, PluginError, Prepare, PrimSet, PrimitiveSet, SampleSurface, Scene,
-    Shade, Shader, TriangleSlices, Triangles,
+    BoundingVolumes, Camera, Child, Env, Environment, FlattensPrimitives, FromTransform,
+    Integrator, Light, Material, Object, Plugin, PluginError, Prepare, PrimSet, PrimitiveSet,
+    SampleSurface, Scene, Shade, Shader, TriangleSlices, Triangles,
 };
 pub use serde;
 

@@ -264,6 +264,21 @@ pub struct ObjectModule {
             out: *mut SurfaceSample,
         ) -> bool,
     >,
+    /// The paper's `inq_bounds` for the volume types beyond the box
+    /// ([`bound_kind`]: sphere, hull points, slabs) over `[time0, time1]`, own
+    /// space; the object sets `out.written` for a kind it offers (issue 12).
+    /// Absent, or not written: the caller derives the volume from the box.
+    #[sabi(missing_field(default))]
+    pub inq_bounds: Option<
+        unsafe extern "C" fn(
+            this: *const c_void,
+            kind: u32,
+            time0: f32,
+            time1: f32,
+            out: *mut BoundingVolume,
+            sink: ErrSink,
+        ) -> i32,
+    >,
 }
 
 /// A triangle mesh's data, lent by the object that owns it through the

@@ -47,6 +47,83 @@ pub struct Bounds3 {
     pub max: Float3,
 }
 
+/// The paper's bounding-volume types beyond the box, asked for through the
+/// object entry `inq_bounds` (the box, mandatory, is `bounds`). An object
+/// answers the kinds it can bound tighter than its box; for the others the
+/// caller derives one (`sdk::Child` does: a sphere around the box, the box's
+/// corners as hull points, slabs from the hull points).
+pub mod bound_kind {
+    /// A sphere ([`BoundSphere`](super::BoundSphere)).
+    pub const SPHERE: u32 = 1;
+    /// Hull points: the object lies inside their convex hull.
+    pub const HULL: u32 = 2;
+    /// Kay–Kajiya slabs along [`SLAB_NORMALS`](super::SLAB_NORMALS).
+    pub const SLABS: u32 = 3;
+}
+
+/// A bounding sphere: every point of the object is within `radius` of
+/// `center` (exactly, after the rounding of both).
+#[repr(C)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq)]
+pub struct BoundSphere {
+    /// Centre.
+    pub center: Float3,
+    /// Radius (negative: nothing to bound).
+    pub radius: f32,
+}
+
+/// Number of slab normals: Kay and Kajiya's seven.
+pub const SLAB_COUNT: usize = 7;
+
+/// The slab normals of [`SlabBounds`]: the three axes and the four
+/// diagonals, **not normalised** (components ±1, so a point's distance along
+/// one is a signed sum of its coordinates, exact in f64). Fixed by the ABI
+/// so that volumes from different plugins combine.
+pub const SLAB_NORMALS: [[f32; 3]; SLAB_COUNT] = [
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, -1.0],
+];
+
+/// A plane-set bounding volume (Kay and Kajiya 1986): every point `p` of the
+/// object has `lo[k] <= n_k · p <= hi[k]` for each of [`SLAB_NORMALS`].
+/// The first three slabs are the object's box.
+#[repr(C)]
+#[derive(StableAbi, Clone, Copy, Debug, PartialEq)]
+pub struct SlabBounds {
+    /// Near plane along each normal.
+    pub lo: [f32; SLAB_COUNT],
+    /// Far plane along each normal.
+    pub hi: [f32; SLAB_COUNT],
+}
+
+/// The answer record of `inq_bounds`: the object fills the part for the kind
+/// asked and sets `written`; `written == false` means "not offered for this
+/// kind", and the caller derives one.
+#[repr(C)]
+#[derive(StableAbi, Clone, Copy, Debug)]
+pub struct BoundingVolume {
+    /// Set by the object when it wrote the kind asked for.
+    pub written: bool,
+    /// [`bound_kind::SPHERE`].
+    pub sphere: BoundSphere,
+    /// [`bound_kind::SLABS`].
+    pub slabs: SlabBounds,
+    /// [`bound_kind::HULL`]: the caller's buffer of `hull_cap` points. The
+    /// object writes up to `hull_cap` of its points and sets `hull_len` to
+    /// how many it has; when that exceeds `hull_cap` the caller asks again
+    /// with room for all.
+    pub hull: *mut [f32; 3],
+    /// Capacity of `hull`.
+    pub hull_cap: u32,
+    /// Number of hull points the object has.
+    pub hull_len: u32,
+}
+
 /// A ray. The direction is unit length only at the root: a transform maps the
 /// ray without renormalising, so `t` keeps the caller's parameterisation and
 /// compares across levels. A hit counts only if `t_min < t < t_max` and `t`

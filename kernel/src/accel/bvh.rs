@@ -20,6 +20,17 @@ use crate::abi::{Bounds3, Ray};
 use glam::Vec3;
 use std::ops::Range;
 
+/// What a child slot of a 4-wide node holds ([`Bvh4::slots`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Slot {
+    /// Nothing (a node with fewer than four children).
+    Empty,
+    /// An inner node: its index (its slots are `4 × index ..`).
+    Node(usize),
+    /// A leaf: a range of [`Bvh4::order`].
+    Leaf(Range<usize>),
+}
+
 /// A gap in a padded leaf order ([`Bvh4::pad_leaves`]).
 pub const PAD: u32 = u32::MAX;
 
@@ -243,6 +254,62 @@ impl Bvh4 {
         ray: &Ray,
         t_max: f32,
         node_tests: &mut u64,
+        leaf: impl FnMut(Range<usize>) -> Option<f32>,
+    ) {
+        self.walk::<false>(ray, t_max, node_tests, |_, t, _| Some(t), leaf)
+    }
+
+    /// [`traverse`](Self::traverse) with a second test per child: of the
+    /// children whose box the ray enters, `screen(slot, t_entry, t_max)` is
+    /// asked for each (`slot` = node × 4 + position, as [`Bvh4::slots`]
+    /// names them) and may reject it (`None`) or return a later entry
+    /// distance. An aggregate bounding its children with tighter volumes
+    /// than boxes (spheres, slabs) tests them here, on the box test's
+    /// survivors only.
+    #[inline]
+    pub fn traverse_screened(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        screen: impl FnMut(usize, f32, f32) -> Option<f32>,
+        leaf: impl FnMut(Range<usize>) -> Option<f32>,
+    ) {
+        self.walk::<true>(ray, t_max, node_tests, screen, leaf)
+    }
+
+    /// Every child slot of the 4-wide tree, children before their parents
+    /// (reverse node order: a node's children are stored after it): its id
+    /// (node × 4 + position) and what it holds. The root is not a slot;
+    /// when the whole tree is one leaf there are none.
+    pub fn slots(&self) -> impl Iterator<Item = (usize, Slot)> + '_ {
+        (0..self.nodes.len()).rev().flat_map(move |n| {
+            let node = &self.nodes[n];
+            (0..4).map(move |k| {
+                let slot = if node.count[k] > 0 {
+                    Slot::Leaf(node.first[k] as usize..(node.first[k] + node.count[k]) as usize)
+                } else if node.lo[0][k] > node.hi[0][k] {
+                    Slot::Empty
+                } else {
+                    Slot::Node(node.first[k] as usize)
+                };
+                (n * 4 + k, slot)
+            })
+        })
+    }
+
+    /// Number of slot ids ([`Bvh4::slots`]): four per node.
+    pub fn slot_count(&self) -> usize {
+        self.nodes.len() * 4
+    }
+
+    #[inline(always)]
+    fn walk<const SCREEN: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        mut screen: impl FnMut(usize, f32, f32) -> Option<f32>,
         mut leaf: impl FnMut(Range<usize>) -> Option<f32>,
     ) {
         if let Some(r) = &self.root_leaf {
@@ -271,7 +338,18 @@ impl Bvh4 {
             } else {
                 let node = &self.nodes[cur as usize];
                 *node_tests += 1;
-                let (mask, t_near) = pre.test4(node, ray.t_min, t_max);
+                let (mut mask, mut t_near) = pre.test4(node, ray.t_min, t_max);
+                if SCREEN {
+                    let mut m = mask;
+                    while m != 0 {
+                        let k = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        match screen(cur as usize * 4 + k, t_near[k], t_max) {
+                            Some(t) => t_near[k] = t,
+                            None => mask &= !(1 << k),
+                        }
+                    }
+                }
                 if mask != 0 {
                     cur = self.descend(node, cur, mask, &t_near, &mut stack);
                     continue;

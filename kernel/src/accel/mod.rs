@@ -13,7 +13,7 @@ mod bvh;
 mod mailbox;
 mod prims;
 
-pub use bvh::{BuildParams, Bvh4, MAX_DEPTH, PAD};
+pub use bvh::{BuildParams, Bvh4, Slot, MAX_DEPTH, PAD};
 pub use mailbox::Mailbox;
 pub use prims::{tri_bounds, Gathered, Nearest, PrimRef, Primitives, WHOLE};
 

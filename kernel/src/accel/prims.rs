@@ -292,6 +292,45 @@ impl Primitives {
             .collect();
     }
 
+    /// Points whose hull contains entry `i` (before [`Primitives::pack`]):
+    /// a triangle's vertices, a set primitive's box corners, a whole
+    /// child's own hull points (`inq_bounds`); none for a gap.
+    pub fn hull_points(&self, i: usize) -> Result<Vec<[f32; 3]>, PluginError> {
+        let r = self.refs[i];
+        if r.child == u32::MAX {
+            return Ok(Vec::new());
+        }
+        match self.sources[r.child as usize] {
+            Source::Triangles => Ok(self.tris[i].to_vec()),
+            Source::Set(set) => {
+                let mut b = [Bounds3::EMPTY];
+                set.bounds(r.prim, &mut b)?;
+                Ok(crate::geom::box_corners(&b[0]))
+            }
+            Source::Whole => self.children[r.child as usize].hull_points(0.0, 1.0),
+        }
+    }
+
+    /// A sphere containing entry `i` (before [`Primitives::pack`]); a whole
+    /// child answers with its own.
+    pub fn bound_sphere(&self, i: usize) -> Result<BoundSphere, PluginError> {
+        let r = self.refs[i];
+        match self.sources.get(r.child as usize) {
+            Some(Source::Whole) => self.children[r.child as usize].bound_sphere(0.0, 1.0),
+            _ => Ok(BoundSphere::around_points(&self.hull_points(i)?)),
+        }
+    }
+
+    /// Kay–Kajiya slabs containing entry `i` (before [`Primitives::pack`]);
+    /// a whole child answers with its own.
+    pub fn slabs(&self, i: usize) -> Result<SlabBounds, PluginError> {
+        let r = self.refs[i];
+        match self.sources.get(r.child as usize) {
+            Some(Source::Whole) => self.children[r.child as usize].slabs(0.0, 1.0),
+            _ => Ok(SlabBounds::from_points(&self.hull_points(i)?)),
+        }
+    }
+
     /// Bytes held, for the benchmarks' memory figures.
     pub fn bytes(&self) -> usize {
         self.refs.capacity() * std::mem::size_of::<PrimRef>()

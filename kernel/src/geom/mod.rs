@@ -13,6 +13,7 @@ mod slab;
 mod sphere;
 mod triangle;
 pub mod vec;
+mod volume;
 
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_between, spawn_ray_to, SHADOW_EPSILON};
 pub use placed::{abs_mat3, placed_point_error};
@@ -26,3 +27,4 @@ pub use triangle::{
     intersect_triangle, intersect_triangle_f64, intersect_triangle_sheared, is_degenerate,
     triangle_point_and_error, triangle_point_inset, RayShear, TriHit,
 };
+pub use volume::{box_corners, f32_down, f32_up, overlaps, SlabRay, SphereRay};

@@ -267,6 +267,29 @@ impl Object {
         Ok(Some((p, t)))
     }
 
+    /// A sphere containing the object over `[time0, time1]` (`inq_bounds`,
+    /// derived from its hull points or box when it offers none).
+    pub fn bound_sphere(&self, time0: f32, time1: f32) -> Result<BoundSphere, CallError> {
+        super::volumes::sphere(self.raw(), (time0, time1))
+    }
+
+    /// Points whose convex hull contains the object (its box's corners when
+    /// it offers none).
+    pub fn hull_points(&self, time0: f32, time1: f32) -> Result<Vec<[f32; 3]>, CallError> {
+        super::volumes::hull_points(self.raw(), (time0, time1))
+    }
+
+    /// Kay–Kajiya slabs containing the object (from its hull points when it
+    /// offers none).
+    pub fn slabs(&self, time0: f32, time1: f32) -> Result<SlabBounds, CallError> {
+        super::volumes::slabs(self.raw(), (time0, time1))
+    }
+
+    /// Whether the class answers `inq_bounds` itself.
+    pub fn offers_volumes(&self) -> bool {
+        self.inner.class.inq_bounds().is_some()
+    }
+
     /// Whether the class can sample its surface (be an area light).
     pub fn samples_surface(&self) -> bool {
         self.inner.class.sample_surface().is_some()

@@ -16,6 +16,7 @@
 
 mod handles;
 mod services;
+pub(crate) mod volumes;
 
 pub use handles::{Camera, CreateArgs, Integrator, Light, Object, ObjectBuilder, Shader};
 pub use services::{PrepareServices, SceneRecord, Services, ServicesTable};

@@ -108,6 +108,24 @@ impl Child {
         Ok(b)
     }
 
+    /// A sphere containing the child over `[time0, time1]`: its own
+    /// (`inq_bounds`), else around its hull points, else around its box.
+    pub fn bound_sphere(&self, time0: f32, time1: f32) -> Result<BoundSphere, PluginError> {
+        crate::host::volumes::sphere(self.obj, (time0, time1)).map_err(|e| self.error(e))
+    }
+
+    /// Points whose convex hull contains the child: its own, else its
+    /// box's corners.
+    pub fn hull_points(&self, time0: f32, time1: f32) -> Result<Vec<[f32; 3]>, PluginError> {
+        crate::host::volumes::hull_points(self.obj, (time0, time1)).map_err(|e| self.error(e))
+    }
+
+    /// Kay–Kajiya slabs containing the child: its own, else from its hull
+    /// points (exact: diagonal sums in f64, rounded outward).
+    pub fn slabs(&self, time0: f32, time1: f32) -> Result<SlabBounds, PluginError> {
+        crate::host::volumes::slabs(self.obj, (time0, time1)).map_err(|e| self.error(e))
+    }
+
     /// Run a cold entry with an error sink; a failure names the child's class.
     fn cold(
         &self,

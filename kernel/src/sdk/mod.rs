@@ -330,6 +330,36 @@ pub trait SampleSurface: Object {
     fn sample_surface(&self, u: [f32; 2]) -> Option<(glam::Vec3, glam::Vec3)>;
 }
 
+/// Capability: the paper's bounding volumes beyond the box (`inq_bounds`).
+///
+/// Every method is optional: answer the kinds you bound tighter than your
+/// box (a sphere for a sphere or a torus, hull points for a mesh or a
+/// polygon, slabs for anything whose plane-set volume you can compute
+/// exactly). For a kind you leave out, callers derive one from what you
+/// do answer, or from the box: a sphere around the box, the box's corners
+/// as hull points, slabs from the hull points (see [`Child::slabs`]).
+/// Every volume must contain the object over `[time0, time1]`, in its own
+/// space, after rounding: build them with the kernel's outward-rounding
+/// constructors ([`BoundSphere::around_points`](crate::abi::BoundSphere::around_points),
+/// [`SlabBounds::from_points`](crate::abi::SlabBounds::from_points)).
+pub trait BoundingVolumes: Object {
+    /// A sphere containing the object.
+    fn bound_sphere(&self, time0: f32, time1: f32) -> Option<crate::abi::BoundSphere> {
+        let _ = (time0, time1);
+        None
+    }
+    /// Points whose convex hull contains the object (a mesh's vertices).
+    fn hull_points(&self, time0: f32, time1: f32) -> Option<std::borrow::Cow<'_, [[f32; 3]]>> {
+        let _ = (time0, time1);
+        None
+    }
+    /// Kay–Kajiya slabs containing the object.
+    fn slabs(&self, time0: f32, time1: f32) -> Option<crate::abi::SlabBounds> {
+        let _ = (time0, time1);
+        None
+    }
+}
+
 /// The class named by [`crate::classes::INSTANCE_TRANSFORM`] offers it.
 pub trait FromTransform: Object {
     /// Create from the object-to-parent transform (f64, finite, well conditioned).

@@ -225,6 +225,7 @@ pub fn object_module<T: Object, D: Decl>() -> ObjectModule {
         triangles: None,
         flattens_primitives: false,
         sample_surface: None,
+        inq_bounds: None,
     }
 }
 
@@ -344,6 +345,60 @@ impl<T: FlattensPrimitives, D: Decl> Install<T, D> {
     pub fn FlattensPrimitives(m: &mut ObjectModule) {
         m.flattens_primitives = true;
     }
+}
+
+#[allow(non_snake_case)]
+impl<T: BoundingVolumes, D: Decl> Install<T, D> {
+    /// Answer `inq_bounds` for spheres, hull points and slabs.
+    pub fn BoundingVolumes(m: &mut ObjectModule) {
+        m.inq_bounds = Some(obj_inq_bounds::<T>);
+    }
+}
+
+unsafe extern "C" fn obj_inq_bounds<T: BoundingVolumes>(
+    this: *const c_void,
+    kind: u32,
+    t0: f32,
+    t1: f32,
+    out: *mut BoundingVolume,
+    sink: ErrSink,
+) -> i32 {
+    cold(sink, || {
+        // SAFETY: the host passes the live object and a valid, exclusive
+        // record whose `hull` has room for `hull_cap` points.
+        let (o, out) = unsafe { (obj::<T>(this), &mut *out) };
+        out.written = false;
+        match kind {
+            bound_kind::SPHERE => {
+                if let Some(s) = o.bound_sphere(t0, t1) {
+                    out.sphere = s;
+                    out.written = true;
+                }
+            }
+            bound_kind::SLABS => {
+                if let Some(s) = o.slabs(t0, t1) {
+                    out.slabs = s;
+                    out.written = true;
+                }
+            }
+            bound_kind::HULL => {
+                if let Some(pts) = o.hull_points(t0, t1) {
+                    let n = u32::try_from(pts.len())
+                        .map_err(|_| PluginError::msg("more than 2^32 hull points"))?;
+                    let copy = n.min(out.hull_cap) as usize;
+                    if copy > 0 {
+                        // SAFETY: the caller's buffer holds `hull_cap` points.
+                        unsafe { std::slice::from_raw_parts_mut(out.hull, copy) }
+                            .copy_from_slice(&pts[..copy]);
+                    }
+                    out.hull_len = n;
+                    out.written = true;
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    })
 }
 
 #[allow(non_snake_case)]

@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::accel::{cull_bound, BuildParams, Bvh4, Nearest, Primitives};
+use rtk_kernel::accel::{cull_bound, BuildParams, Bvh4, Nearest, Primitives, Slot};
+use rtk_kernel::geom::{overlaps, SlabRay, SphereRay};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 
@@ -9,6 +10,28 @@ use rtk_kernel::*;
 struct Params {
     #[serde(default = "four")]
     max_leaf: u32,
+    #[serde(default)]
+    bound: Bound,
+}
+
+/// The volume each child of a node is bounded by (issue 12: what the
+/// paper's volume types cost and save). Boxes are always tested, four at a
+/// time; a sphere or slabs is tested after, on the box's survivors, so the
+/// child is bounded by the intersection of both.
+#[derive(Deserialize, Default, Clone, Copy, PartialEq)]
+#[serde(crate = "rtk_kernel::serde", rename_all = "lowercase")]
+enum Bound {
+    #[default]
+    Box,
+    Sphere,
+    Slabs,
+}
+
+/// The second volume of every slot, when `bound` asks for one.
+enum Volumes {
+    None,
+    Spheres(Vec<BoundSphere>),
+    Slabs(Vec<SlabBounds>),
 }
 
 fn four() -> u32 {
@@ -18,7 +41,9 @@ fn four() -> u32 {
 struct Bvh {
     children: Vec<Child>,
     params: BuildParams,
+    bound: Bound,
     built: Option<(Primitives, Bvh4)>,
+    volumes: Volumes,
 }
 
 impl Plugin for Bvh {
@@ -34,7 +59,9 @@ impl Plugin for Bvh {
                 max_leaf: p.max_leaf as usize,
                 ..BuildParams::default()
             },
+            bound: p.bound,
             built: None,
+            volumes: Volumes::None,
         })
     }
 }
@@ -53,6 +80,23 @@ impl Object for Bvh {
         bvh.pad_leaves(4);
         let mut prims = g.prims;
         prims.reorder(&bvh.order);
+        self.volumes = match self.bound {
+            Bound::Box => Volumes::None,
+            Bound::Sphere => Volumes::Spheres(slot_volumes(
+                &bvh,
+                &prims,
+                |i| prims.bound_sphere(i),
+                |a, b| a.union(b),
+                BoundSphere::EMPTY,
+            )?),
+            Bound::Slabs => Volumes::Slabs(slot_volumes(
+                &bvh,
+                &prims,
+                |i| prims.slabs(i),
+                |a, b| a.union(b),
+                SlabBounds::EMPTY,
+            )?),
+        };
         prims.pack();
         self.built = Some((prims, bvh));
         Ok(())
@@ -72,10 +116,28 @@ impl Object for Bvh {
         let mut nodes = 0;
         // Boxes within the tie margin of the best hit are still entered
         // (rule 11, `cull_bound`).
-        bvh.traverse(ray, cull_bound(ray.t_max), &mut nodes, |leaf| {
+        let leaf = |leaf| {
             prims.intersect_range(ctx, &mut q, leaf, hit, level);
             Some(cull_bound(q.ray.t_max))
-        });
+        };
+        let t_max = cull_bound(ray.t_max);
+        match &self.volumes {
+            Volumes::None => bvh.traverse(ray, t_max, &mut nodes, leaf),
+            Volumes::Spheres(v) => bvh.traverse_screened(
+                ray,
+                t_max,
+                &mut nodes,
+                screen(ray, v, SphereRay::new(ray), BoundSphere::interval),
+                leaf,
+            ),
+            Volumes::Slabs(v) => bvh.traverse_screened(
+                ray,
+                t_max,
+                &mut nodes,
+                screen(ray, v, SlabRay::new(ray), SlabBounds::interval),
+                leaf,
+            ),
+        }
         ctx.stats.node_tests += nodes;
         q.found()
     }
@@ -87,10 +149,27 @@ impl Object for Bvh {
         let mut found = false;
         let mut nodes = 0;
         // Any hit will do: no tie to keep, no margin.
-        bvh.traverse(ray, ray.t_max, &mut nodes, |leaf| {
+        let leaf = |leaf| {
             found = prims.occluded_range(ctx, ray, leaf, level);
             (!found).then_some(ray.t_max)
-        });
+        };
+        match &self.volumes {
+            Volumes::None => bvh.traverse(ray, ray.t_max, &mut nodes, leaf),
+            Volumes::Spheres(v) => bvh.traverse_screened(
+                ray,
+                ray.t_max,
+                &mut nodes,
+                screen(ray, v, SphereRay::new(ray), BoundSphere::interval),
+                leaf,
+            ),
+            Volumes::Slabs(v) => bvh.traverse_screened(
+                ray,
+                ray.t_max,
+                &mut nodes,
+                screen(ray, v, SlabRay::new(ray), SlabBounds::interval),
+                leaf,
+            ),
+        }
         ctx.stats.node_tests += nodes;
         found
     }
@@ -108,6 +187,46 @@ impl Object for Bvh {
             prims.local_geom(ctx, ray, hit, level, mask, out);
         }
     }
+}
+
+/// The test of a slot's second volume: it may only reject the child or move
+/// its entry later (the volume's entry, when past the box's).
+fn screen<'a, V, P: 'a>(
+    ray: &'a Ray,
+    v: &'a [V],
+    pre: P,
+    interval: fn(&V, &P) -> Option<(f32, f32)>,
+) -> impl FnMut(usize, f32, f32) -> Option<f32> + 'a {
+    move |slot, t_box, t_max| {
+        overlaps(interval(&v[slot], &pre), ray.t_min, t_max).map(|t| t.max(t_box))
+    }
+}
+
+/// A volume for every slot of the tree, children first: a leaf's from its
+/// entries' volumes, an inner slot's from its node's four.
+fn slot_volumes<V: Copy>(
+    bvh: &Bvh4,
+    prims: &Primitives,
+    of: impl Fn(usize) -> Result<V, PluginError>,
+    union: impl Fn(&V, &V) -> V,
+    empty: V,
+) -> Result<Vec<V>, PluginError> {
+    let _ = prims;
+    let mut v = vec![empty; bvh.slot_count()];
+    for (id, slot) in bvh.slots() {
+        v[id] = match slot {
+            Slot::Empty => empty,
+            Slot::Leaf(r) => {
+                let mut acc = empty;
+                for i in r {
+                    acc = union(&acc, &of(i)?);
+                }
+                acc
+            }
+            Slot::Node(n) => (0..4).fold(empty, |acc, k| union(&acc, &v[n * 4 + k])),
+        };
+    }
+    Ok(v)
 }
 
 impl FlattensPrimitives for Bvh {}

@@ -31,6 +31,8 @@ fn up() -> [f32; 3] {
 }
 
 struct CylinderObject {
+    /// Bounding sphere (`inq_bounds`).
+    sphere: BoundSphere,
     cyl: Cylinder<f32>,
     bounds: Bounds3,
 }
@@ -75,7 +77,11 @@ impl Plugin for CylinderObject {
             std::array::from_fn(|i| b64[i].min(top[i]) - e[i]),
             std::array::from_fn(|i| b64[i].max(top[i]) + e[i]),
         );
+        let mid: [f64; 3] = std::array::from_fn(|i| b64[i] + 0.5 * axis[i]);
+        let reach = ((r as f64).powi(2) + (0.5 * h).powi(2)).sqrt();
+        let sphere = BoundSphere::from_f64(mid, reach, 1e-6 * reach);
         Ok(CylinderObject {
+            sphere,
             cyl: Cylinder::new(b64, axis, r as f64),
             bounds: Bounds3::new(Vec3::from(lo), Vec3::from(hi)),
         })
@@ -146,8 +152,20 @@ impl Object for CylinderObject {
     }
 }
 
+/// A sphere around the shape, and slabs cutting its box with the sphere's
+/// tangent planes.
+impl BoundingVolumes for CylinderObject {
+    fn bound_sphere(&self, _t0: f32, _t1: f32) -> Option<BoundSphere> {
+        Some(self.sphere)
+    }
+    fn slabs(&self, _t0: f32, _t1: f32) -> Option<SlabBounds> {
+        Some(SlabBounds::from_box(&self.bounds).intersect(&SlabBounds::around_sphere(&self.sphere)))
+    }
+}
+
 rtk_kernel::export_object!(
     CylinderObject,
     class = "cylinder",
-    doc = include_str!("../README.md")
+    doc = include_str!("../README.md"),
+    capabilities = [BoundingVolumes]
 );

@@ -31,6 +31,8 @@ fn up() -> [f32; 3] {
 }
 
 struct DiskObject {
+    /// Bounding sphere (`inq_bounds`).
+    sphere: BoundSphere,
     disk: Disk<f32>,
     bounds: Bounds3,
 }
@@ -77,6 +79,7 @@ impl Plugin for DiskObject {
             std::array::from_fn(|i| c64[i] + e[i]),
         );
         Ok(DiskObject {
+            sphere: BoundSphere::from_f64(c64, r as f64, 1e-6 * r as f64),
             disk,
             bounds: Bounds3::new(Vec3::from(lo), Vec3::from(hi)),
         })
@@ -155,8 +158,20 @@ impl Object for DiskObject {
     }
 }
 
+/// A sphere around the disk (its rim), and slabs cutting its box with the
+/// sphere's tangent planes.
+impl BoundingVolumes for DiskObject {
+    fn bound_sphere(&self, _t0: f32, _t1: f32) -> Option<BoundSphere> {
+        Some(self.sphere)
+    }
+    fn slabs(&self, _t0: f32, _t1: f32) -> Option<SlabBounds> {
+        Some(SlabBounds::from_box(&self.bounds).intersect(&SlabBounds::around_sphere(&self.sphere)))
+    }
+}
+
 rtk_kernel::export_object!(
     DiskObject,
     class = "disk",
-    doc = include_str!("../README.md")
+    doc = include_str!("../README.md"),
+    capabilities = [BoundingVolumes]
 );

@@ -373,9 +373,17 @@ impl SampleSurface for Mesh {
     }
 }
 
+/// The vertices are exact hull points: the triangles are intersected on
+/// them, unrounded. Spheres and slabs are derived from them by the caller.
+impl BoundingVolumes for Mesh {
+    fn hull_points(&self, _t0: f32, _t1: f32) -> Option<std::borrow::Cow<'_, [[f32; 3]]>> {
+        Some(std::borrow::Cow::Borrowed(&self.p))
+    }
+}
+
 rtk_kernel::export_object!(
     Mesh,
     class = "mesh",
     doc = include_str!("../README.md"),
-    capabilities = [PrimitiveSet, Triangles, SampleSurface]
+    capabilities = [PrimitiveSet, Triangles, SampleSurface, BoundingVolumes]
 );

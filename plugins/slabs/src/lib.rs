@@ -1,6 +1,6 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::accel::{cull_bound, Nearest, Primitives, PAD, WHOLE};
+use rtk_kernel::accel::{cull_bound, Nearest, Primitives, PAD};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use std::ops::Range;
@@ -16,17 +16,17 @@ fn four() -> u32 {
     4
 }
 
-/// Number of plane-set normals: Kay and Kajiya's seven.
-const K: usize = 7;
+/// Number of plane-set normals: Kay and Kajiya's seven (the kernel's).
+const K: usize = SLAB_COUNT;
 
 /// The four diagonal normals (unnormalised: components ±1, so a point's
 /// distance along one is a signed sum of its coordinates). The first three
-/// normals are the axes.
+/// normals are the axes (the kernel's SLAB_NORMALS).
 const DIAG: [[f32; 3]; 4] = [
-    [1.0, 1.0, 1.0],
-    [-1.0, 1.0, 1.0],
-    [1.0, -1.0, 1.0],
-    [1.0, 1.0, -1.0],
+    SLAB_NORMALS[3],
+    SLAB_NORMALS[4],
+    SLAB_NORMALS[5],
+    SLAB_NORMALS[6],
 ];
 
 /// Deepest tree built: a node this deep becomes a leaf, which bounds the
@@ -67,70 +67,6 @@ impl Slabs {
             }
         }
         self
-    }
-
-    /// Add a point, rounding outward: the point lies in the volume exactly.
-    fn include(&mut self, p: [f32; 3]) {
-        for (a, &x) in p.iter().enumerate() {
-            if x < self.lo[a] {
-                self.lo[a] = x;
-            }
-            if x > self.hi[a] {
-                self.hi[a] = x;
-            }
-        }
-        for (j, n) in DIAG.iter().enumerate() {
-            let k = 3 + j;
-            // In f64, with a bound on its rounding (three terms), then
-            // rounded outward to f32.
-            let s: f64 = (0..3).map(|a| n[a] as f64 * p[a] as f64).sum();
-            let err = (0..3).map(|a| (p[a] as f64).abs()).sum::<f64>() * f64::EPSILON * 2.0;
-            let (lo, hi) = if s.is_finite() && err.is_finite() {
-                (down(s - err), up(s + err))
-            } else {
-                (f32::NEG_INFINITY, f32::INFINITY)
-            };
-            if lo < self.lo[k] {
-                self.lo[k] = lo;
-            }
-            if hi > self.hi[k] {
-                self.hi[k] = hi;
-            }
-        }
-    }
-
-    /// The eight corners of a box (a box that is not empty).
-    fn of_box(b: &Bounds3) -> Slabs {
-        let mut s = Slabs::EMPTY;
-        if b.is_empty() {
-            return s;
-        }
-        let (lo, hi) = (b.min.to_array(), b.max.to_array());
-        for c in 0..8 {
-            let pick = |a: usize| if c >> a & 1 == 0 { lo[a] } else { hi[a] };
-            s.include([pick(0), pick(1), pick(2)]);
-        }
-        s
-    }
-}
-
-/// The largest f32 not above `v`.
-fn down(v: f64) -> f32 {
-    let f = v as f32;
-    if f as f64 > v {
-        f.next_down()
-    } else {
-        f
-    }
-}
-
-/// The smallest f32 not below `v`.
-fn up(v: f64) -> f32 {
-    let f = v as f32;
-    if (f as f64) < v {
-        f.next_up()
-    } else {
-        f
     }
 }
 
@@ -593,31 +529,13 @@ impl Object for SlabTree {
     fn prepare(&mut self, _env: &Prepare) -> Result<(), PluginError> {
         let g = Primitives::gather(&self.children)?;
         let mut prims = g.prims;
-        // The volumes: from a triangle's vertices exactly; otherwise from
-        // the eight corners of the primitive's (or child's) box.
-        let sets: Vec<Option<PrimSet>> = self.children.iter().map(|c| c.prim_set()).collect();
-        let mut tris = Vec::with_capacity(sets.len());
-        for s in &sets {
-            tris.push(match s {
-                Some(s) => s.triangles()?,
-                None => None,
-            });
-        }
+        // The volumes, from the kernel (`inq_bounds`): a triangle's from
+        // its vertices exactly, a set primitive's from its box's corners, a
+        // whole child's its own (a sphere's tangent planes, a transformed
+        // child's placed hull points), else from its box's corners.
         let vols: Vec<Slabs> = (0..prims.len())
-            .map(|i| {
-                let r = prims.get(i);
-                match (&tris[r.child as usize], r.prim) {
-                    (Some(t), p) if p != WHOLE => {
-                        let mut s = Slabs::EMPTY;
-                        for k in t.indices[p as usize] {
-                            s.include(t.positions[k as usize]);
-                        }
-                        s
-                    }
-                    _ => Slabs::of_box(&g.boxes[i]),
-                }
-            })
-            .collect();
+            .map(|i| prims.slabs(i).map(|s| Slabs { lo: s.lo, hi: s.hi }))
+            .collect::<Result<_, _>>()?;
         let bounds = g.boxes.iter().fold(Bounds3::EMPTY, |b, x| b.union(*x));
         // Primitives that can never be hit (empty boxes) stay out.
         let mut order: Vec<u32> = (0..prims.len() as u32)

@@ -137,9 +137,25 @@ impl SampleSurface for Sphere {
     }
 }
 
+/// The sphere bounds itself exactly; its slabs are its tangent planes.
+impl BoundingVolumes for Sphere {
+    fn bound_sphere(&self, _t0: f32, _t1: f32) -> Option<BoundSphere> {
+        Some(self.volume())
+    }
+    fn slabs(&self, _t0: f32, _t1: f32) -> Option<SlabBounds> {
+        Some(SlabBounds::around_sphere(&self.volume()))
+    }
+}
+
+impl Sphere {
+    fn volume(&self) -> BoundSphere {
+        BoundSphere::from_f64(self.c.as_dvec3().to_array(), self.r as f64, 0.0)
+    }
+}
+
 rtk_kernel::export_object!(
     Sphere,
     class = "sphere",
     doc = include_str!("../README.md"),
-    capabilities = [SampleSurface]
+    capabilities = [SampleSurface, BoundingVolumes]
 );

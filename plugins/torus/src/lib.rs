@@ -35,6 +35,8 @@ fn up() -> [f32; 3] {
 }
 
 struct TorusObject {
+    /// Bounding sphere (`inq_bounds`).
+    sphere: BoundSphere,
     torus: Torus<f32>,
     bounds: Bounds3,
 }
@@ -81,7 +83,9 @@ impl Plugin for TorusObject {
             std::array::from_fn(|i| c64[i] - e[i]),
             std::array::from_fn(|i| c64[i] + e[i]),
         );
+        let sphere = BoundSphere::from_f64(c64, (big + small) as f64, 1e-6 * (big + small) as f64);
         Ok(TorusObject {
+            sphere,
             torus: Torus::new(c64, axis, big as f64, small as f64),
             bounds: Bounds3::new(Vec3::from(lo), Vec3::from(hi)),
         })
@@ -158,8 +162,20 @@ impl Object for TorusObject {
     }
 }
 
+/// A sphere around the shape, and slabs cutting its box with the sphere's
+/// tangent planes.
+impl BoundingVolumes for TorusObject {
+    fn bound_sphere(&self, _t0: f32, _t1: f32) -> Option<BoundSphere> {
+        Some(self.sphere)
+    }
+    fn slabs(&self, _t0: f32, _t1: f32) -> Option<SlabBounds> {
+        Some(SlabBounds::from_box(&self.bounds).intersect(&SlabBounds::around_sphere(&self.sphere)))
+    }
+}
+
 rtk_kernel::export_object!(
     TorusObject,
     class = "torus",
-    doc = include_str!("../README.md")
+    doc = include_str!("../README.md"),
+    capabilities = [BoundingVolumes]
 );

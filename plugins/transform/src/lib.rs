@@ -30,6 +30,10 @@ struct Transform {
     child: Option<Child>,
     /// The child's box over the shutter interval, in its own space.
     child_bounds: Bounds3,
+    /// The placed child's sphere and slabs (`inq_bounds`), from its hull
+    /// points mapped in f64.
+    sphere: BoundSphere,
+    slabs: SlabBounds,
 }
 
 fn to_f32(m: &DAffine3) -> Affine3A {
@@ -89,6 +93,8 @@ impl FromTransform for Transform {
             flips: m.matrix3.determinant() < 0.0,
             child: None,
             child_bounds: Bounds3::EMPTY,
+            sphere: BoundSphere::EMPTY,
+            slabs: SlabBounds::EMPTY,
         })
     }
 }
@@ -110,6 +116,44 @@ impl Object for Transform {
             return Err(PluginError::key("children", "a transform needs one child"));
         };
         self.child_bounds = c.bounds(0.0, 1.0)?;
+        // The child's hull points (its box's corners if it offers none),
+        // placed in f64; each is within γ₃ of its magnitude of where the f32
+        // matrix the rays are mapped with puts it, as the box's corners are.
+        let m = DAffine3::from_mat3_translation(
+            Mat3::from(self.m.matrix3).as_dmat3(),
+            Vec3::from(self.m.translation).as_dvec3(),
+        );
+        let placed: Vec<[f64; 3]> = c
+            .hull_points(0.0, 1.0)?
+            .iter()
+            .map(|p| m.transform_point3(Vec3::from(*p).as_dvec3()).to_array())
+            .collect();
+        let reach = placed.iter().flatten().fold(0.0f64, |a, &x| a.max(x.abs()));
+        let pad = reach * gamma::<f32>(3) as f64;
+        self.sphere = BoundSphere::around_points_f64(&placed, pad);
+        self.slabs = SlabBounds::from_points_f64(&placed, pad);
+        // The child's own sphere, placed, when that is smaller (a rotated
+        // torus or rod): radius times a bound on the matrix's largest
+        // singular value, √λmax(LᵀL) ≤ √(Gershgorin row sum), exact for a
+        // rotation with uniform scale.
+        let cs = c.bound_sphere(0.0, 1.0)?;
+        if !cs.is_empty() {
+            let l = m.matrix3;
+            let a = l.transpose() * l;
+            let gersh = (0..3)
+                .map(|i| a.row(i).abs().element_sum())
+                .fold(0.0f64, f64::max);
+            let center = m.transform_point3(Vec3::from(cs.center).as_dvec3());
+            let pad = center.abs().max_element() * gamma::<f32>(3) as f64;
+            let placed = BoundSphere::from_f64(
+                center.to_array(),
+                cs.radius as f64 * (gersh * (1.0 + 1e-12)).sqrt(),
+                pad,
+            );
+            if placed.radius < self.sphere.radius {
+                self.sphere = placed;
+            }
+        }
         Ok(())
     }
 
@@ -198,9 +242,23 @@ impl Transform {
     }
 }
 
+/// Volumes of the placed child: a rotated child keeps a tight sphere and
+/// slabs where its box would be rotated and re-boxed.
+impl BoundingVolumes for Transform {
+    fn bound_sphere(&self, _t0: f32, _t1: f32) -> Option<BoundSphere> {
+        Some(self.sphere)
+    }
+    fn slabs(&self, t0: f32, t1: f32) -> Option<SlabBounds> {
+        Some(
+            self.slabs
+                .intersect(&SlabBounds::from_box(&self.bounds(t0, t1))),
+        )
+    }
+}
+
 rtk_kernel::export_object!(
     Transform,
     class = "transform",
     doc = include_str!("../README.md"),
-    capabilities = [FromTransform]
+    capabilities = [FromTransform, BoundingVolumes]
 );
