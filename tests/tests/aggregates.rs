@@ -269,14 +269,21 @@ fn every_aggregate_matches_the_list() {
     }
 }
 
-/// The `bvh`'s second volumes (issue 12) change the work, never the answer:
-/// spheres and slabs around spheres, triangles, rotated instances and a
-/// nested cluster.
+/// The `bvh`'s options change the work, never the answer: its second
+/// volumes (issue 12: spheres and slabs around spheres, triangles, rotated
+/// instances and a nested cluster) and both widths (4-wide SSE; 8-wide is
+/// the default where the CPU has AVX2).
 #[test]
-fn bvh_bounded_by_spheres_or_slabs_matches_the_list() {
-    for bound in ["sphere", "slabs"] {
+fn bvh_options_match_the_list() {
+    for extra in [
+        "bound = \"sphere\"",
+        "bound = \"slabs\"",
+        "width = 4",
+        "width = 8",
+        "width = 4\nbound = \"slabs\"",
+    ] {
         for seed in [1, 2, 3] {
-            check_with(seed, "bvh", &format!("bound = \"{bound}\""));
+            check_with(seed, "bvh", extra);
         }
     }
 }

@@ -1,12 +1,16 @@
 //! The codebase's one BVH: a binned-SAH binary build collapsed into a
-//! 4-wide tree whose nodes are tested four boxes at a time (SSE), traversed
-//! nearest child first.
+//! W-wide tree (W = 4 or 8) whose nodes are tested W boxes at a time (SSE
+//! at 4, AVX2 at 8, chosen at run time by CPU feature detection, with a
+//! portable test the unit tests check against both), traversed nearest
+//! child first.
 //!
-//! What it takes from the public leaders: Embree's BVH4 (four children per
-//! node in structure-of-arrays layout, one SIMD slab test for all four) and
+//! What it takes from the public leaders: Embree's BVH4/BVH8 (four or eight
+//! children per node in structure-of-arrays layout, one SIMD slab test for
+//! all of them; the 8-wide test compiled into a whole AVX2 traversal, so the
+//! dispatch is one branch per ray, as tinybvh's BVH8_CPU does) and
 //! its binned SAH builder (Wald 2007, 16–32 bins on centroids); tinybvh and
 //! obvhs collapse a binary SAH tree into the wide one the same way (open the
-//! child with the largest surface area until four). Robustness is the
+//! child with the largest surface area until W). Robustness is the
 //! kernel's own (`docs/numerics.md` rule 10): the far distance is widened by
 //! `1 + 2γ₃` (Ize 2013), and a NaN from `0 · ∞` (an origin on a slab plane,
 //! a zero direction component) leaves the previous bound in place, so a box
@@ -36,8 +40,9 @@ pub const PAD: u32 = u32::MAX;
 
 /// Deepest binary tree built; the 4-wide tree is no deeper.
 pub const MAX_DEPTH: usize = 64;
-/// Entries of the traversal stack: at most three siblings pushed per level.
-const STACK: usize = 3 * MAX_DEPTH + 1;
+/// Entries of the traversal stack: at most seven siblings (8-wide) pushed
+/// per level. It is never initialised, so its size costs nothing per ray.
+const STACK: usize = 7 * MAX_DEPTH + 1;
 /// Bins of the SAH sweep per axis.
 const BINS: usize = 16;
 
@@ -62,31 +67,44 @@ impl Default for BuildParams {
     }
 }
 
-/// A node of four children, boxes in structure-of-arrays order.
+/// A node of `W` children, boxes in structure-of-arrays order (128 bytes
+/// at W = 4, 256 at W = 8: two and four cache lines).
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug)]
-struct Node4 {
+struct Node<const W: usize> {
     /// Lower corners: `lo[axis][child]`.
-    lo: [[f32; 4]; 3],
+    lo: [[f32; W]; 3],
     /// Upper corners.
-    hi: [[f32; 4]; 3],
+    hi: [[f32; W]; 3],
     /// Inner child: node index; leaf: first primitive (in leaf order).
-    first: [u32; 4],
+    first: [u32; W],
     /// 0 for an inner child, else the leaf's primitive count. An empty slot
     /// has an empty box and is never entered.
-    count: [u32; 4],
+    count: [u32; W],
 }
 
-const EMPTY_NODE: Node4 = Node4 {
-    lo: [[f32::INFINITY; 4]; 3],
-    hi: [[f32::NEG_INFINITY; 4]; 3],
-    first: [0; 4],
-    count: [0; 4],
-};
+impl<const W: usize> Node<W> {
+    const EMPTY: Self = Node {
+        lo: [[f32::INFINITY; W]; 3],
+        hi: [[f32::NEG_INFINITY; W]; 3],
+        first: [0; W],
+        count: [0; W],
+    };
+}
 
-/// A 4-wide BVH over primitive boxes. Leaves are ranges of [`Bvh4::order`].
-pub struct Bvh4 {
-    nodes: Vec<Node4>,
+/// The 4-wide tree: SSE, every x86_64 CPU (and the portable test elsewhere).
+pub type Bvh4 = Bvh<4>;
+/// The 8-wide tree: AVX2 where the CPU has it (detected at run time), the
+/// portable test otherwise. Half the depth of [`Bvh4`]: fewer dependent
+/// node fetches per ray, which is what incoherent rays wait on.
+pub type Bvh8 = Bvh<8>;
+
+/// A `W`-wide BVH over primitive boxes (W = 4 or 8). Leaves are ranges of
+/// [`Bvh::order`].
+pub struct Bvh<const W: usize> {
+    nodes: Vec<Node<W>>,
+    /// Test nodes with AVX2 (W = 8 on a CPU that has it).
+    avx2: bool,
     /// Leaf order: `order[k]` is the primitive stored `k`-th.
     pub order: Vec<u32>,
     /// The root is itself a leaf (fewer primitives than a node splits).
@@ -108,9 +126,35 @@ enum Kind2 {
     Inner(u32, u32),
 }
 
-impl Bvh4 {
+impl<const W: usize> Bvh<W> {
+    /// Children per node.
+    pub const WIDTH: usize = W;
+    /// log2(W): a leaf on the traversal stack is `(node << SHIFT) | slot`.
+    const SHIFT: u32 = W.trailing_zeros();
+
+    /// Whether this CPU runs the `W`-wide test in SIMD (always for W = 4 on
+    /// x86_64; for W = 8, when it has AVX2).
+    pub fn simd_available() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            W == 4 || (W == 8 && std::arch::is_x86_feature_detected!("avx2"))
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    }
+
+    /// Use the AVX2 test (W = 8) or the portable one: the tests run both,
+    /// so CI checks the fallback on any machine. Asking for AVX2 on a CPU
+    /// without it is ignored.
+    pub fn set_avx2(&mut self, on: bool) {
+        self.avx2 = on && W == 8 && Self::simd_available();
+    }
+
     /// Build over `boxes` (one per primitive; empty boxes are never hit).
-    pub fn build(boxes: &[Bounds3], params: BuildParams) -> Bvh4 {
+    pub fn build(boxes: &[Bounds3], params: BuildParams) -> Self {
+        assert!(W == 4 || W == 8, "a BVH is 4 or 8 wide");
         let centroids: Vec<Vec3> = boxes
             .iter()
             .map(|b| (b.min.v() + b.max.v()) * 0.5)
@@ -127,8 +171,9 @@ impl Bvh4 {
         let bounds = b.nodes[root as usize].bounds;
         let depth = b.depth;
         let nodes2 = b.nodes;
-        let mut out = Bvh4 {
+        let mut out = Bvh {
             nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
+            avx2: false,
             order,
             root_leaf: None,
             depth,
@@ -137,10 +182,11 @@ impl Bvh4 {
         match nodes2[root as usize].kind {
             Kind2::Leaf(first, n) => out.root_leaf = Some(first..first + n),
             Kind2::Inner(..) => {
-                out.nodes.push(EMPTY_NODE);
+                out.nodes.push(Node::EMPTY);
                 out.collapse(&nodes2, root, 0);
             }
         }
+        out.set_avx2(true);
         out
     }
 
@@ -162,7 +208,7 @@ impl Bvh4 {
             self.root_leaf = Some(at..at + (r.end - r.start));
         }
         for n in 0..self.nodes.len() {
-            for s in 0..4 {
+            for s in 0..W {
                 let (first, count) = (self.nodes[n].first[s], self.nodes[n].count[s]);
                 if count > 0 {
                     self.nodes[n].first[s] = place(first, count, &mut out);
@@ -179,7 +225,7 @@ impl Bvh4 {
             .iter()
             .map(|r| r.start as usize..r.end as usize);
         let inner = self.nodes.iter().flat_map(|n| {
-            (0..4)
+            (0..W)
                 .filter(|&s| n.count[s] > 0)
                 .map(|s| n.first[s] as usize..(n.first[s] + n.count[s]) as usize)
         });
@@ -193,17 +239,17 @@ impl Bvh4 {
 
     /// Bytes held by the tree (nodes and leaf order).
     pub fn bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node4>() + self.order.capacity() * 4
+        self.nodes.capacity() * std::mem::size_of::<Node<W>>() + self.order.capacity() * 4
     }
 
-    /// Fill 4-wide node `at` from binary node `n`: open the child with the
-    /// largest area until four children (or only leaves) remain.
+    /// Fill `W`-wide node `at` from binary node `n`: open the child with the
+    /// largest area until `W` children (or only leaves) remain.
     fn collapse(&mut self, n2: &[Node2], n: u32, at: usize) {
         let Kind2::Inner(a, b) = n2[n as usize].kind else {
             unreachable!("collapse starts at an inner node")
         };
         let mut kids = vec![a, b];
-        while kids.len() < 4 {
+        while kids.len() < W {
             let open = kids
                 .iter()
                 .enumerate()
@@ -218,7 +264,7 @@ impl Bvh4 {
             };
             kids.splice(i..=i, [l, r]);
         }
-        let mut node = EMPTY_NODE;
+        let mut node = Node::EMPTY;
         for (slot, &k) in kids.iter().enumerate() {
             let bb = n2[k as usize].bounds;
             for axis in 0..3 {
@@ -233,7 +279,7 @@ impl Bvh4 {
                 }
                 Kind2::Inner(..) => {
                     let child = self.nodes.len();
-                    self.nodes.push(EMPTY_NODE);
+                    self.nodes.push(Node::EMPTY);
                     node.first[slot] = child as u32;
                     self.collapse(n2, k, child);
                 }
@@ -256,12 +302,18 @@ impl Bvh4 {
         node_tests: &mut u64,
         leaf: impl FnMut(Range<usize>) -> Option<f32>,
     ) {
-        self.walk::<false>(ray, t_max, node_tests, |_, t, _| Some(t), leaf)
+        let screen = |_, t, _| Some(t);
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only when the CPU has AVX2.
+            return unsafe { self.walk_avx2::<false>(ray, t_max, node_tests, screen, leaf) };
+        }
+        self.walk::<false, false>(ray, t_max, node_tests, screen, leaf)
     }
 
     /// [`traverse`](Self::traverse) with a second test per child: of the
     /// children whose box the ray enters, `screen(slot, t_entry, t_max)` is
-    /// asked for each (`slot` = node × 4 + position, as [`Bvh4::slots`]
+    /// asked for each (`slot` = node × W + position, as [`Bvh::slots`]
     /// names them) and may reject it (`None`) or return a later entry
     /// distance. An aggregate bounding its children with tighter volumes
     /// than boxes (spheres, slabs) tests them here, on the box test's
@@ -275,17 +327,40 @@ impl Bvh4 {
         screen: impl FnMut(usize, f32, f32) -> Option<f32>,
         leaf: impl FnMut(Range<usize>) -> Option<f32>,
     ) {
-        self.walk::<true>(ray, t_max, node_tests, screen, leaf)
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only when the CPU has AVX2.
+            return unsafe { self.walk_avx2::<true>(ray, t_max, node_tests, screen, leaf) };
+        }
+        self.walk::<true, false>(ray, t_max, node_tests, screen, leaf)
     }
 
-    /// Every child slot of the 4-wide tree, children before their parents
+    /// The walk compiled with AVX2 enabled, so the 8-wide test's intrinsics
+    /// inline into it: the dispatch is one branch per ray, not per node.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn walk_avx2<const SCREEN: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        screen: impl FnMut(usize, f32, f32) -> Option<f32>,
+        leaf: impl FnMut(Range<usize>) -> Option<f32>,
+    ) {
+        self.walk::<SCREEN, true>(ray, t_max, node_tests, screen, leaf)
+    }
+
+    /// Every child slot of the tree, children before their parents
     /// (reverse node order: a node's children are stored after it): its id
-    /// (node × 4 + position) and what it holds. The root is not a slot;
+    /// (node × W + position) and what it holds. The root is not a slot;
     /// when the whole tree is one leaf there are none.
     pub fn slots(&self) -> impl Iterator<Item = (usize, Slot)> + '_ {
         (0..self.nodes.len()).rev().flat_map(move |n| {
             let node = &self.nodes[n];
-            (0..4).map(move |k| {
+            (0..W).map(move |k| {
                 let slot = if node.count[k] > 0 {
                     Slot::Leaf(node.first[k] as usize..(node.first[k] + node.count[k]) as usize)
                 } else if node.lo[0][k] > node.hi[0][k] {
@@ -293,18 +368,18 @@ impl Bvh4 {
                 } else {
                     Slot::Node(node.first[k] as usize)
                 };
-                (n * 4 + k, slot)
+                (n * W + k, slot)
             })
         })
     }
 
-    /// Number of slot ids ([`Bvh4::slots`]): four per node.
+    /// Number of slot ids ([`Bvh::slots`]): `W` per node.
     pub fn slot_count(&self) -> usize {
-        self.nodes.len() * 4
+        self.nodes.len() * W
     }
 
     #[inline(always)]
-    fn walk<const SCREEN: bool>(
+    fn walk<const SCREEN: bool, const AVX: bool>(
         &self,
         ray: &Ray,
         t_max: f32,
@@ -324,11 +399,14 @@ impl Bvh4 {
         let mut buf = std::mem::MaybeUninit::uninit();
         let mut stack = Stack::on(&mut buf);
         // The node or leaf being visited: a node index, or a leaf as
-        // (node << 2 | slot) with the top bit set.
+        // (node << SHIFT | slot) with the top bit set.
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                let (n, slot) = ((cur & !LEAF) >> 2, (cur & 3) as usize);
+                let (n, slot) = (
+                    (cur & !LEAF) >> Self::SHIFT,
+                    (cur & (W as u32 - 1)) as usize,
+                );
                 let node = &self.nodes[n as usize];
                 let first = node.first[slot] as usize;
                 match leaf(first..first + node.count[slot] as usize) {
@@ -338,13 +416,13 @@ impl Bvh4 {
             } else {
                 let node = &self.nodes[cur as usize];
                 *node_tests += 1;
-                let (mut mask, mut t_near) = pre.test4(node, ray.t_min, t_max);
+                let (mut mask, mut t_near) = pre.test::<W, AVX>(node, ray.t_min, t_max);
                 if SCREEN {
                     let mut m = mask;
                     while m != 0 {
                         let k = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        match screen(cur as usize * 4 + k, t_near[k], t_max) {
+                        match screen(cur as usize * W + k, t_near[k], t_max) {
                             Some(t) => t_near[k] = t,
                             None => mask &= !(1 << k),
                         }
@@ -373,23 +451,23 @@ impl Bvh4 {
     #[inline(always)]
     fn descend(
         &self,
-        node: &Node4,
+        node: &Node<W>,
         at: u32,
         mask: u32,
-        t_near: &[f32; 4],
+        t_near: &[f32; W],
         stack: &mut Stack,
     ) -> u32 {
         let child = |slot: usize| {
             if node.count[slot] == 0 {
                 node.first[slot]
             } else {
-                LEAF | (at << 2) | slot as u32
+                LEAF | (at << Self::SHIFT) | slot as u32
             }
         };
         if mask.count_ones() == 1 {
             return child(mask.trailing_zeros() as usize);
         }
-        let mut kids = [(0u32, 0f32); 4];
+        let mut kids = [(0u32, 0f32); W];
         let mut n = 0;
         let mut m = mask;
         while m != 0 {
@@ -398,7 +476,7 @@ impl Bvh4 {
             kids[n] = (child(slot), t_near[slot]);
             n += 1;
         }
-        // Insertion sort of at most four, farthest first.
+        // Insertion sort of at most W, farthest first.
         for i in 1..n {
             let mut j = i;
             while j > 0 && kids[j - 1].1 < kids[j].1 {
@@ -620,23 +698,48 @@ impl Precomp {
     }
 
     /// The children of `n` the ray's interval `[t_min, t_max]` overlaps: a
-    /// bit mask and each child's entry distance.
-    #[inline]
-    fn test4(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
+    /// bit mask and each child's entry distance. `AVX`: the caller runs
+    /// with AVX2 enabled (W = 8).
+    #[inline(always)]
+    fn test<const W: usize, const AVX: bool>(
+        &self,
+        n: &Node<W>,
+        t_min: f32,
+        t_max: f32,
+    ) -> (u32, [f32; W]) {
+        let mut tn = [0f32; W];
+        let rows = |r: &[[f32; W]; 3]| [r[0].as_ptr(), r[1].as_ptr(), r[2].as_ptr()];
         #[cfg(target_arch = "x86_64")]
         {
-            self.test4_sse(n, t_min, t_max)
+            if W == 4 {
+                // SAFETY: the rows are four floats, `tn` has room for four;
+                // SSE2 is part of every x86_64 CPU.
+                let m = unsafe {
+                    self.test4_sse(rows(&n.lo), rows(&n.hi), t_min, t_max, tn.as_mut_ptr())
+                };
+                return (m, tn);
+            }
+            if W == 8 && AVX {
+                // SAFETY: the rows are eight floats, `tn` has room for
+                // eight; the caller runs with AVX2 (`walk_avx2`).
+                let m = unsafe {
+                    self.test8_avx(rows(&n.lo), rows(&n.hi), t_min, t_max, tn.as_mut_ptr())
+                };
+                return (m, tn);
+            }
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            self.test4_scalar(n, t_min, t_max)
-        }
+        (self.test_scalar(n, t_min, t_max, &mut tn), tn)
     }
 
     /// The portable test, one box at a time, with the same NaN rule.
-    #[allow(dead_code)]
-    fn test4_scalar(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
-        let (mut mask, mut tn) = (0, [0f32; 4]);
+    fn test_scalar<const W: usize>(
+        &self,
+        n: &Node<W>,
+        t_min: f32,
+        t_max: f32,
+        tn: &mut [f32; W],
+    ) -> u32 {
+        let mut mask = 0;
         for (slot, tn) in tn.iter_mut().enumerate() {
             let (mut t0, mut t1) = (t_min, t_max);
             for a in 0..3 {
@@ -660,51 +763,92 @@ impl Precomp {
                 mask |= 1 << slot;
             }
         }
-        (mask, tn)
+        mask
     }
 
-    /// The SSE test. Not a `#[target_feature]` function (those are never
-    /// inlined into callers without the feature): SSE and SSE2 are part of
-    /// the x86_64 baseline, enabled for every function of the crate.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn test4_sse(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
-        // SAFETY: every intrinsic in the body needs only SSE/SSE2, which
-        // every x86_64 CPU has (the target enables "sse2" for all code).
-        unsafe { self.test4_sse_body(n, t_min, t_max) }
-    }
-
+    /// The SSE test of four boxes. Not a `#[target_feature]` function
+    /// (those are never inlined into callers without the feature): SSE and
+    /// SSE2 are part of the x86_64 baseline.
+    ///
     /// # Safety
-    /// The CPU must have SSE2 (every x86_64 CPU does).
+    /// Each row pointer reads four floats; `out` has room for four.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn test4_sse_body(&self, n: &Node4, t_min: f32, t_max: f32) -> (u32, [f32; 4]) {
+    unsafe fn test4_sse(
+        &self,
+        lo: [*const f32; 3],
+        hi: [*const f32; 3],
+        t_min: f32,
+        t_max: f32,
+        out: *mut f32,
+    ) -> u32 {
         use std::arch::x86_64::*;
-        let mut t0 = _mm_set1_ps(t_min);
-        let mut t1 = _mm_set1_ps(t_max);
-        let scale = _mm_set1_ps(FAR_SCALE);
-        for a in 0..3 {
-            let (near, far) = if self.neg[a] {
-                (&n.hi[a], &n.lo[a])
-            } else {
-                (&n.lo[a], &n.hi[a])
-            };
-            let o = _mm_set1_ps(self.o[a]);
-            let inv = _mm_set1_ps(self.inv[a]);
-            // SAFETY: each row is four floats.
-            let (near, far) = unsafe { (_mm_loadu_ps(near.as_ptr()), _mm_loadu_ps(far.as_ptr())) };
-            let tna = _mm_mul_ps(_mm_sub_ps(near, o), inv);
-            let tfa = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(far, o), inv), scale);
-            // MAXPS/MINPS return the second operand when either is NaN: a
-            // NaN slab (0·∞) leaves the running bound in place.
-            t0 = _mm_max_ps(tna, t0);
-            t1 = _mm_min_ps(tfa, t1);
+        // SAFETY: per the contract; the rest is register arithmetic.
+        unsafe {
+            let mut t0 = _mm_set1_ps(t_min);
+            let mut t1 = _mm_set1_ps(t_max);
+            let scale = _mm_set1_ps(FAR_SCALE);
+            for a in 0..3 {
+                let (near, far) = if self.neg[a] {
+                    (hi[a], lo[a])
+                } else {
+                    (lo[a], hi[a])
+                };
+                let o = _mm_set1_ps(self.o[a]);
+                let inv = _mm_set1_ps(self.inv[a]);
+                let tna = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(near), o), inv);
+                let tfa = _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(far), o), inv), scale);
+                // MAXPS/MINPS return the second operand when either is NaN: a
+                // NaN slab (0·∞) leaves the running bound in place.
+                t0 = _mm_max_ps(tna, t0);
+                t1 = _mm_min_ps(tfa, t1);
+            }
+            _mm_storeu_ps(out, t0);
+            _mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32
         }
-        let mask = _mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32;
-        let mut tn = [0f32; 4];
-        // SAFETY: `tn` has room for the four floats stored.
-        unsafe { _mm_storeu_ps(tn.as_mut_ptr(), t0) };
-        (mask, tn)
+    }
+
+    /// The AVX test of eight boxes: the SSE test's operations, eight lanes
+    /// wide (the same NaN rule: VMAXPS/VMINPS return the second operand).
+    ///
+    /// # Safety
+    /// The CPU must have AVX (the caller is compiled with AVX2 enabled);
+    /// each row pointer reads eight floats; `out` has room for eight.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn test8_avx(
+        &self,
+        lo: [*const f32; 3],
+        hi: [*const f32; 3],
+        t_min: f32,
+        t_max: f32,
+        out: *mut f32,
+    ) -> u32 {
+        use std::arch::x86_64::*;
+        // SAFETY: per the contract; the rest is register arithmetic.
+        unsafe {
+            let mut t0 = _mm256_set1_ps(t_min);
+            let mut t1 = _mm256_set1_ps(t_max);
+            let scale = _mm256_set1_ps(FAR_SCALE);
+            for a in 0..3 {
+                let (near, far) = if self.neg[a] {
+                    (hi[a], lo[a])
+                } else {
+                    (lo[a], hi[a])
+                };
+                let o = _mm256_set1_ps(self.o[a]);
+                let inv = _mm256_set1_ps(self.inv[a]);
+                let tna = _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(near), o), inv);
+                let tfa = _mm256_mul_ps(
+                    _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(far), o), inv),
+                    scale,
+                );
+                t0 = _mm256_max_ps(tna, t0);
+                t1 = _mm256_min_ps(tfa, t1);
+            }
+            _mm256_storeu_ps(out, t0);
+            _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1)) as u32
+        }
     }
 }
 
@@ -730,7 +874,7 @@ mod tests {
 
     /// Every box a ray overlaps (by the kernel's scalar slab test) is in a
     /// leaf the traversal visits, and every primitive is in exactly one leaf.
-    fn check(boxes: &[Bounds3], bvh: &Bvh4, seed: u64) {
+    fn check<const W: usize>(boxes: &[Bounds3], bvh: &Bvh<W>, seed: u64) {
         let mut ids = bvh.order.clone();
         ids.sort_unstable();
         assert_eq!(ids, (0..boxes.len() as u32).collect::<Vec<_>>());
@@ -776,6 +920,12 @@ mod tests {
             let boxes = random_boxes(n, seed);
             let bvh = Bvh4::build(&boxes, BuildParams::default());
             check(&boxes, &bvh, seed + 100);
+            // 8-wide, with AVX2 where the CPU has it and with the portable
+            // test (the fallback a CPU without AVX2 runs).
+            let mut bvh = Bvh8::build(&boxes, BuildParams::default());
+            check(&boxes, &bvh, seed + 100);
+            bvh.set_avx2(false);
+            check(&boxes, &bvh, seed + 100);
         }
     }
 
@@ -784,6 +934,7 @@ mod tests {
         // All the same box, and boxes flat in z: no bin split exists.
         let same = vec![Bounds3::new(Vec3::ZERO, Vec3::ONE); 300];
         check(&same, &Bvh4::build(&same, BuildParams::default()), 7);
+        check(&same, &Bvh8::build(&same, BuildParams::default()), 7);
         let flat: Vec<Bounds3> = (0..400)
             .map(|i| {
                 let x = (i % 20) as f32;
@@ -792,6 +943,7 @@ mod tests {
             })
             .collect();
         check(&flat, &Bvh4::build(&flat, BuildParams::default()), 8);
+        check(&flat, &Bvh8::build(&flat, BuildParams::default()), 8);
     }
 
     #[test]
@@ -807,6 +959,7 @@ mod tests {
         let bvh = Bvh4::build(&boxes, BuildParams::default());
         assert!(bvh.depth <= MAX_DEPTH, "{}", bvh.depth);
         check(&boxes, &bvh, 9);
+        check(&boxes, &Bvh8::build(&boxes, BuildParams::default()), 9);
     }
 
     #[test]
@@ -816,14 +969,22 @@ mod tests {
 
     #[test]
     fn sse_and_scalar_tests_agree() {
-        let boxes = random_boxes(4, 11);
-        let mut node = EMPTY_NODE;
+        simd_and_scalar_agree::<4>();
+        simd_and_scalar_agree::<8>();
+    }
+
+    /// The SIMD test (SSE at W = 4, AVX at W = 8 where the CPU has it)
+    /// gives the portable test's mask and entry distances, bit for bit.
+    fn simd_and_scalar_agree<const W: usize>() {
+        let boxes = random_boxes(W, 11);
+        let mut node = Node::<W>::EMPTY;
         for (s, b) in boxes.iter().enumerate() {
             for a in 0..3 {
                 node.lo[a][s] = b.min.v()[a];
                 node.hi[a][s] = b.max.v()[a];
             }
         }
+        let avx = Bvh::<W>::simd_available();
         let mut r = RngState::seeded(12);
         for _ in 0..10_000 {
             let o = Vec3::new(r.range_f32(-15.0, 15.0), r.range_f32(-15.0, 15.0), 0.0);
@@ -833,10 +994,19 @@ mod tests {
                 r.range_f32(-1.0, 1.0),
             );
             let pre = Precomp::new(&Ray::new(o, d));
-            assert_eq!(
-                pre.test4(&node, 0.0, f32::INFINITY).0,
-                pre.test4_scalar(&node, 0.0, f32::INFINITY).0
-            );
+            let mut tn = [0f32; W];
+            let want = pre.test_scalar(&node, 0.0, f32::INFINITY, &mut tn);
+            let got = if avx {
+                pre.test::<W, true>(&node, 0.0, f32::INFINITY)
+            } else {
+                pre.test::<W, false>(&node, 0.0, f32::INFINITY)
+            };
+            assert_eq!(got.0, want);
+            for (k, (g, w)) in got.1.iter().zip(&tn).enumerate() {
+                if want >> k & 1 == 1 {
+                    assert_eq!(g.to_bits(), w.to_bits());
+                }
+            }
         }
     }
 }

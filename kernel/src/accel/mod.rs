@@ -5,7 +5,8 @@
 //! - [`Primitives`]: an aggregate's children flattened into primitives
 //!   (triangles as data, primitive sets, whole children), with leaf queries
 //!   that keep the `list`'s exact answer and tie rule;
-//! - [`Bvh4`]: the one BVH of the codebase (binned SAH, 4-wide SSE nodes);
+//! - [`Bvh`]: the one BVH of the codebase (binned SAH; 8-wide AVX2 nodes
+//!   chosen at run time, 4-wide SSE nodes, a portable test for both);
 //! - [`Mailbox`]: per-thread "tested already in this query" marks for
 //!   structures that reference a primitive from several cells.
 
@@ -13,7 +14,7 @@ mod bvh;
 mod mailbox;
 mod prims;
 
-pub use bvh::{BuildParams, Bvh4, Slot, MAX_DEPTH, PAD};
+pub use bvh::{BuildParams, Bvh, Bvh4, Bvh8, Slot, MAX_DEPTH, PAD};
 pub use mailbox::Mailbox;
 pub use prims::{tri_bounds, Gathered, Nearest, PrimRef, Primitives, WHOLE};
 

@@ -1,6 +1,6 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::accel::{cull_bound, BuildParams, Bvh4, Nearest, Primitives, Slot};
+use rtk_kernel::accel::{cull_bound, BuildParams, Bvh, Nearest, Primitives, Slot};
 use rtk_kernel::geom::{overlaps, SlabRay, SphereRay};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -11,11 +11,17 @@ struct Params {
     #[serde(default = "four")]
     max_leaf: u32,
     #[serde(default)]
+    width: Option<u32>,
+    #[serde(default)]
     bound: Bound,
 }
 
+fn four() -> u32 {
+    4
+}
+
 /// The volume each child of a node is bounded by (issue 12: what the
-/// paper's volume types cost and save). Boxes are always tested, four at a
+/// paper's volume types cost and save). Boxes are always tested, W at a
 /// time; a sphere or slabs is tested after, on the box's survivors, so the
 /// child is bounded by the intersection of both.
 #[derive(Deserialize, Default, Clone, Copy, PartialEq)]
@@ -34,39 +40,167 @@ enum Volumes {
     Slabs(Vec<SlabBounds>),
 }
 
-fn four() -> u32 {
-    4
+/// The tree, 4 or 8 wide (chosen in `create`).
+enum Tree {
+    Four(Bvh<4>),
+    Eight(Bvh<8>),
 }
 
-struct Bvh {
-    children: Vec<Child>,
-    params: BuildParams,
-    bound: Bound,
-    built: Option<(Primitives, Bvh4)>,
+struct Built {
+    prims: Primitives,
+    tree: Tree,
     volumes: Volumes,
 }
 
-impl Plugin for Bvh {
+struct BvhObject {
+    children: Vec<Child>,
+    params: BuildParams,
+    width: u32,
+    bound: Bound,
+    built: Option<Built>,
+}
+
+impl Plugin for BvhObject {
     type Params = Params;
 
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
         if !(1..=64).contains(&p.max_leaf) {
             return Err(PluginError::key("max_leaf", "must be between 1 and 64"));
         }
-        Ok(Bvh {
+        let width = match p.width {
+            None if Bvh::<8>::simd_available() => 8,
+            None => 4,
+            Some(w @ (4 | 8)) => w,
+            Some(w) => {
+                return Err(PluginError::key(
+                    "width",
+                    format!("must be 4 or 8, got {w}"),
+                ))
+            }
+        };
+        Ok(BvhObject {
             children: Vec::new(),
             params: BuildParams {
                 max_leaf: p.max_leaf as usize,
                 ..BuildParams::default()
             },
+            width,
             bound: p.bound,
             built: None,
-            volumes: Volumes::None,
         })
     }
 }
 
-impl Object for Bvh {
+/// Build a `W`-wide tree over the gathered primitives, with its slots'
+/// second volumes.
+fn build<const W: usize>(
+    g: rtk_kernel::accel::Gathered,
+    params: BuildParams,
+    bound: Bound,
+) -> Result<(Primitives, Bvh<W>, Volumes), PluginError> {
+    let mut bvh = Bvh::<W>::build(&g.boxes, params);
+    // Leaves start at multiples of four: each names its block of four
+    // triangles, screened at once.
+    bvh.pad_leaves(4);
+    let mut prims = g.prims;
+    prims.reorder(&bvh.order);
+    let volumes = match bound {
+        Bound::Box => Volumes::None,
+        Bound::Sphere => Volumes::Spheres(slot_volumes(
+            &bvh,
+            |i| prims.bound_sphere(i),
+            |a, b| a.union(b),
+            BoundSphere::EMPTY,
+        )?),
+        Bound::Slabs => Volumes::Slabs(slot_volumes(
+            &bvh,
+            |i| prims.slabs(i),
+            |a, b| a.union(b),
+            SlabBounds::EMPTY,
+        )?),
+    };
+    prims.pack();
+    Ok((prims, bvh, volumes))
+}
+
+/// Nearest hit through a `W`-wide tree.
+#[inline(always)]
+fn intersect_in<const W: usize>(
+    b: &Built,
+    bvh: &Bvh<W>,
+    ctx: &mut TraceCtx,
+    ray: &Ray,
+    hit: &mut Hit,
+    level: u32,
+) -> bool {
+    let mut q = Nearest::new(ray);
+    let mut nodes = 0;
+    let leaf = |leaf| {
+        b.prims.intersect_range(ctx, &mut q, leaf, hit, level);
+        Some(cull_bound(q.ray.t_max))
+    };
+    // Boxes within the tie margin of the best hit are still entered
+    // (rule 11, `cull_bound`).
+    let t_max = cull_bound(ray.t_max);
+    match &b.volumes {
+        Volumes::None => bvh.traverse(ray, t_max, &mut nodes, leaf),
+        Volumes::Spheres(v) => bvh.traverse_screened(
+            ray,
+            t_max,
+            &mut nodes,
+            screen(ray, v, SphereRay::new(ray), BoundSphere::interval),
+            leaf,
+        ),
+        Volumes::Slabs(v) => bvh.traverse_screened(
+            ray,
+            t_max,
+            &mut nodes,
+            screen(ray, v, SlabRay::new(ray), SlabBounds::interval),
+            leaf,
+        ),
+    }
+    ctx.stats.node_tests += nodes;
+    q.found()
+}
+
+/// Any hit through a `W`-wide tree.
+#[inline(always)]
+fn occluded_in<const W: usize>(
+    b: &Built,
+    bvh: &Bvh<W>,
+    ctx: &mut TraceCtx,
+    ray: &Ray,
+    level: u32,
+) -> bool {
+    let mut found = false;
+    let mut nodes = 0;
+    // Any hit will do: no tie to keep, no margin.
+    let leaf = |leaf| {
+        found = b.prims.occluded_range(ctx, ray, leaf, level);
+        (!found).then_some(ray.t_max)
+    };
+    match &b.volumes {
+        Volumes::None => bvh.traverse(ray, ray.t_max, &mut nodes, leaf),
+        Volumes::Spheres(v) => bvh.traverse_screened(
+            ray,
+            ray.t_max,
+            &mut nodes,
+            screen(ray, v, SphereRay::new(ray), BoundSphere::interval),
+            leaf,
+        ),
+        Volumes::Slabs(v) => bvh.traverse_screened(
+            ray,
+            ray.t_max,
+            &mut nodes,
+            screen(ray, v, SlabRay::new(ray), SlabBounds::interval),
+            leaf,
+        ),
+    }
+    ctx.stats.node_tests += nodes;
+    found
+}
+
+impl Object for BvhObject {
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         self.children.push(child);
         Ok(())
@@ -74,104 +208,50 @@ impl Object for Bvh {
 
     fn prepare(&mut self, _env: &Prepare) -> Result<(), PluginError> {
         let g = Primitives::gather(&self.children)?;
-        let mut bvh = Bvh4::build(&g.boxes, self.params);
-        // Leaves start at multiples of four: each names its block of four
-        // triangles, screened at once.
-        bvh.pad_leaves(4);
-        let mut prims = g.prims;
-        prims.reorder(&bvh.order);
-        self.volumes = match self.bound {
-            Bound::Box => Volumes::None,
-            Bound::Sphere => Volumes::Spheres(slot_volumes(
-                &bvh,
-                &prims,
-                |i| prims.bound_sphere(i),
-                |a, b| a.union(b),
-                BoundSphere::EMPTY,
-            )?),
-            Bound::Slabs => Volumes::Slabs(slot_volumes(
-                &bvh,
-                &prims,
-                |i| prims.slabs(i),
-                |a, b| a.union(b),
-                SlabBounds::EMPTY,
-            )?),
-        };
-        prims.pack();
-        self.built = Some((prims, bvh));
+        self.built = Some(if self.width == 8 {
+            let (prims, bvh, volumes) = build::<8>(g, self.params, self.bound)?;
+            Built {
+                prims,
+                tree: Tree::Eight(bvh),
+                volumes,
+            }
+        } else {
+            let (prims, bvh, volumes) = build::<4>(g, self.params, self.bound)?;
+            Built {
+                prims,
+                tree: Tree::Four(bvh),
+                volumes,
+            }
+        });
         Ok(())
     }
 
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
-        self.built
-            .as_ref()
-            .map_or(Bounds3::EMPTY, |(_, b)| b.bounds())
+        match self.built.as_ref().map(|b| &b.tree) {
+            Some(Tree::Four(t)) => t.bounds(),
+            Some(Tree::Eight(t)) => t.bounds(),
+            None => Bounds3::EMPTY,
+        }
     }
 
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
-        let Some((prims, bvh)) = &self.built else {
+        let Some(b) = &self.built else {
             return false;
         };
-        let mut q = Nearest::new(ray);
-        let mut nodes = 0;
-        // Boxes within the tie margin of the best hit are still entered
-        // (rule 11, `cull_bound`).
-        let leaf = |leaf| {
-            prims.intersect_range(ctx, &mut q, leaf, hit, level);
-            Some(cull_bound(q.ray.t_max))
-        };
-        let t_max = cull_bound(ray.t_max);
-        match &self.volumes {
-            Volumes::None => bvh.traverse(ray, t_max, &mut nodes, leaf),
-            Volumes::Spheres(v) => bvh.traverse_screened(
-                ray,
-                t_max,
-                &mut nodes,
-                screen(ray, v, SphereRay::new(ray), BoundSphere::interval),
-                leaf,
-            ),
-            Volumes::Slabs(v) => bvh.traverse_screened(
-                ray,
-                t_max,
-                &mut nodes,
-                screen(ray, v, SlabRay::new(ray), SlabBounds::interval),
-                leaf,
-            ),
+        match &b.tree {
+            Tree::Four(t) => intersect_in(b, t, ctx, ray, hit, level),
+            Tree::Eight(t) => intersect_in(b, t, ctx, ray, hit, level),
         }
-        ctx.stats.node_tests += nodes;
-        q.found()
     }
 
     fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, level: u32) -> bool {
-        let Some((prims, bvh)) = &self.built else {
+        let Some(b) = &self.built else {
             return false;
         };
-        let mut found = false;
-        let mut nodes = 0;
-        // Any hit will do: no tie to keep, no margin.
-        let leaf = |leaf| {
-            found = prims.occluded_range(ctx, ray, leaf, level);
-            (!found).then_some(ray.t_max)
-        };
-        match &self.volumes {
-            Volumes::None => bvh.traverse(ray, ray.t_max, &mut nodes, leaf),
-            Volumes::Spheres(v) => bvh.traverse_screened(
-                ray,
-                ray.t_max,
-                &mut nodes,
-                screen(ray, v, SphereRay::new(ray), BoundSphere::interval),
-                leaf,
-            ),
-            Volumes::Slabs(v) => bvh.traverse_screened(
-                ray,
-                ray.t_max,
-                &mut nodes,
-                screen(ray, v, SlabRay::new(ray), SlabBounds::interval),
-                leaf,
-            ),
+        match &b.tree {
+            Tree::Four(t) => occluded_in(b, t, ctx, ray, level),
+            Tree::Eight(t) => occluded_in(b, t, ctx, ray, level),
         }
-        ctx.stats.node_tests += nodes;
-        found
     }
 
     fn local_geom(
@@ -183,8 +263,8 @@ impl Object for Bvh {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        if let Some((prims, _)) = &self.built {
-            prims.local_geom(ctx, ray, hit, level, mask, out);
+        if let Some(b) = &self.built {
+            b.prims.local_geom(ctx, ray, hit, level, mask, out);
         }
     }
 }
@@ -203,15 +283,13 @@ fn screen<'a, V, P: 'a>(
 }
 
 /// A volume for every slot of the tree, children first: a leaf's from its
-/// entries' volumes, an inner slot's from its node's four.
-fn slot_volumes<V: Copy>(
-    bvh: &Bvh4,
-    prims: &Primitives,
+/// entries' volumes, an inner slot's from its node's `W`.
+fn slot_volumes<const W: usize, V: Copy>(
+    bvh: &Bvh<W>,
     of: impl Fn(usize) -> Result<V, PluginError>,
     union: impl Fn(&V, &V) -> V,
     empty: V,
 ) -> Result<Vec<V>, PluginError> {
-    let _ = prims;
     let mut v = vec![empty; bvh.slot_count()];
     for (id, slot) in bvh.slots() {
         v[id] = match slot {
@@ -223,16 +301,16 @@ fn slot_volumes<V: Copy>(
                 }
                 acc
             }
-            Slot::Node(n) => (0..4).fold(empty, |acc, k| union(&acc, &v[n * 4 + k])),
+            Slot::Node(n) => (0..W).fold(empty, |acc, k| union(&acc, &v[n * W + k])),
         };
     }
     Ok(v)
 }
 
-impl FlattensPrimitives for Bvh {}
+impl FlattensPrimitives for BvhObject {}
 
 rtk_kernel::export_object!(
-    Bvh,
+    BvhObject,
     class = "bvh",
     doc = include_str!("../README.md"),
     capabilities = [FlattensPrimitives]
