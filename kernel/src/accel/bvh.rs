@@ -464,30 +464,43 @@ impl<const W: usize> Bvh<W> {
                 LEAF | (at << Self::SHIFT) | slot as u32
             }
         };
-        if mask.count_ones() == 1 {
-            return child(mask.trailing_zeros() as usize);
+        let first = mask.trailing_zeros() as usize;
+        let rest = mask & (mask - 1);
+        if rest == 0 {
+            return child(first);
         }
-        let mut kids = [(0u32, 0f32); W];
-        let mut n = 0;
+        if rest & (rest - 1) == 0 {
+            // Two: the commonest case after one, without a sort.
+            let second = rest.trailing_zeros() as usize;
+            let (near, far) = if t_near[second] < t_near[first] {
+                (second, first)
+            } else {
+                (first, second)
+            };
+            stack.push((child(far), t_near[far]));
+            return child(near);
+        }
+        // More: push them all, order that run of the stack farthest first
+        // (insertion sort of at most W), and take the nearest off the top.
+        let base = stack.len;
         let mut m = mask;
         while m != 0 {
             let slot = m.trailing_zeros() as usize;
             m &= m - 1;
-            kids[n] = (child(slot), t_near[slot]);
-            n += 1;
+            stack.push((child(slot), t_near[slot]));
         }
-        // Insertion sort of at most W, farthest first.
-        for i in 1..n {
+        let run = stack.top_run(base);
+        for i in 1..run.len() {
             let mut j = i;
-            while j > 0 && kids[j - 1].1 < kids[j].1 {
-                kids.swap(j - 1, j);
+            while j > 0 && run[j - 1].1 < run[j].1 {
+                run.swap(j - 1, j);
                 j -= 1;
             }
         }
-        for &k in &kids[..n - 1] {
-            stack.push(k);
+        match stack.pop() {
+            Some((c, _)) => c,
+            None => unreachable!("three or more children were pushed"),
         }
-        kids[n - 1].0
     }
 }
 
@@ -522,6 +535,15 @@ impl<'a> Stack<'a> {
         // SAFETY: `len < STACK`: the slot is inside the borrowed buffer.
         unsafe { self.items.add(self.len).write(v) };
         self.len += 1;
+    }
+
+    /// The entries pushed since the stack held `base`.
+    #[inline(always)]
+    fn top_run(&mut self, base: usize) -> &mut [(u32, f32)] {
+        debug_assert!(base <= self.len);
+        // SAFETY: the slots `base..len` were written by `push` and lie in
+        // the borrowed buffer, which this `&mut self` borrows exclusively.
+        unsafe { std::slice::from_raw_parts_mut(self.items.add(base), self.len - base) }
     }
 
     #[inline(always)]
