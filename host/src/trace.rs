@@ -261,9 +261,11 @@ pub(crate) fn trace_all(
                 let ti = rayon::current_thread_index().unwrap_or(0);
                 let counter = &next_query[ti];
                 let mut ctx = TraceCtx::new(ti as u32, threads, counter.load(Ordering::Relaxed));
+                // One hit record per chunk, reset per ray.
+                let mut hit = Hit::new();
                 let hits = chunk
                     .iter()
-                    .map(|r| trace_one(world, &mut ctx, r, occluded))
+                    .map(|r| trace_one(world, &mut ctx, &mut hit, r, occluded))
                     .collect();
                 counter.store(ctx.query_counter(), Ordering::Relaxed);
                 let failure = ctx.failure().map(|(c, m)| format!("plugin `{c}` {m}"));
@@ -284,7 +286,13 @@ pub(crate) fn trace_all(
 }
 
 #[inline]
-fn trace_one(world: &World, ctx: &mut TraceCtx, r: &RayRec, occluded: bool) -> HitRec {
+fn trace_one(
+    world: &World,
+    ctx: &mut TraceCtx,
+    hit: &mut Hit,
+    r: &RayRec,
+    occluded: bool,
+) -> HitRec {
     let ray = Ray {
         origin: r.o.into(),
         dir: r.d.into(),
@@ -310,8 +318,8 @@ fn trace_one(world: &World, ctx: &mut TraceCtx, r: &RayRec, occluded: bool) -> H
             miss
         };
     }
-    let mut hit = Hit::new();
-    if !world.root.intersect(ctx, &ray, &mut hit) {
+    hit.reset();
+    if !world.root.intersect(ctx, &ray, hit) {
         return miss;
     }
     let e = hit.entry(hit.depth.saturating_sub(1));

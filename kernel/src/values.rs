@@ -202,6 +202,16 @@ impl Hit {
             stack: [HitEntry::default(); HIT_STACK_DEPTH],
         }
     }
+    /// No hit yet, for a record used again: only `t` and `depth` are reset.
+    /// Entries at `depth` and beyond are stale and never read (a level
+    /// writes its entry when it accepts a hit, before anyone reads it), so
+    /// a tracer that keeps one record for many rays skips zeroing the
+    /// 512-byte stack per ray.
+    #[inline]
+    pub fn reset(&mut self) {
+        self.t = f32::INFINITY;
+        self.depth = 0;
+    }
     /// The entry the object at `level` wrote.
     #[inline]
     pub fn entry(&self, level: u32) -> &HitEntry {

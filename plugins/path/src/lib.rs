@@ -170,8 +170,9 @@ impl Integrator for Path {
         let mut kind = ray_kind::TRACED;
         // Segments traced so far, this one included.
         let mut segments = 1u32;
+        let mut hit = Hit::new();
         loop {
-            let mut hit = Hit::new();
+            hit.reset();
             if !scene.intersect(ctx, &ray, kind, &mut hit) {
                 let le = scene.background(ctx, &ray);
                 if !le.is_black() {
