@@ -14,6 +14,11 @@ then
     cargo build --release --workspace
     python3 host/benches/anchors.py --embree PATH/embree_bench --tinybvh PATH/tinybvh_bench \\
         --meshes ../shared/data/meshes/{bunny,teapot,dragon-200k}.ply --rounds 3
+
+--aggregates takes any of bvh, kdtree, octree, grid, slabs, raycls (default:
+the first four). raycls builds its cells while it traces: its build time
+(its `prepare`) leaves them out, and they are built in the first of the
+three passes `rtk trace --iters 3` times (the median pass is reported).
 """
 
 import argparse

@@ -1,20 +1,24 @@
-//! `rtk conform PLUGIN_FILE`: the conformance suite rtk's own object and
-//! aggregate plugins pass, run against any plugin library, built anywhere.
-//! Randomized scenes of spheres and small meshes (and duplicated children,
-//! for ties) are traced under the plugin and under `list`, the oracle, with
-//! random and adversarial rays; then bounds, nesting, concurrency and
-//! parameter refusal. One line per check; a non-zero exit on any failure.
+//! `rtk conform PLUGIN_FILE`: the conformance suite rtk's own plugins pass,
+//! run against any plugin library, built anywhere. One suite per kind:
+//! objects and aggregates (conform_object.rs), shaders (conform_shader.rs),
+//! cameras, lights and integrators (conform_camera.rs, conform_light.rs,
+//! conform_integrator.rs); every kind also gets `unknown-key-refused` and,
+//! given `--panic-param`, `panics-reported` (conform_panics.rs). One line
+//! per check (pass, FAIL or skip); a non-zero exit on any failure.
+//!
+//! The plugin is created with `--params` (default: none; when it refuses
+//! none, the first TOML example of its README it accepts). A failure of
+//! the plugin during a check (a refusal, a panic caught at the boundary)
+//! fails that check with the plugin's message and ends the run there.
 
-use crate::stress::{box_mesh, header, uv_sphere, vec3f, Bench, Probe, Size};
+use crate::stress::{header, Bench, Size};
 use anyhow::{bail, Context, Result};
-use rtk_kernel::abi::{Hit, Ray, TraceCtx};
-use rtk_kernel::glam::{DVec3, Vec3};
 use rtk_kernel::RngState;
-use rtk_shell::World;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The arguments of `rtk conform`.
 #[derive(clap::Args)]
+#[command(after_long_help = CONFORM_HELP)]
 pub struct ConformArgs {
     /// The plugin library (librtk_NAME.so, rtk_NAME.dll, librtk_NAME.dylib).
     pub plugin: PathBuf,
@@ -34,13 +38,346 @@ pub struct ConformArgs {
     /// bvh...) after the plugin's own (repeatable).
     #[arg(long = "plugin-path", value_name = "DIR")]
     pub plugin_path: Vec<PathBuf>,
+    /// Parameters for every instance of the plugin the suite creates: an
+    /// inline TOML table (`'op = "union"'`, `'file = "bunny.ply", normals =
+    /// "vertex"'`) or `@FILE`, a TOML file of them. Relative paths in keys
+    /// named `file` or `*_file` are taken from the working directory (inline)
+    /// or the file's folder (@FILE). Default: none; a plugin that refuses
+    /// none is tried with its README's TOML examples, in order.
+    #[arg(long, value_name = "TOML|@FILE")]
+    pub params: Option<String>,
+    /// Objects: the number of children each instance takes: `any` (an
+    /// aggregate), 0 (a primitive) or N (exactly N, as `motion` takes 1 and
+    /// `csg` 2). Default: found by trying 0 to 3 sphere children.
+    #[arg(long, value_name = "N|any")]
+    pub children: Option<String>,
+    /// Objects: the class the plugin must answer exactly as, built over the
+    /// same children (default: `list` for aggregates; none for plugins with a
+    /// fixed number of children, whose answers are then checked for
+    /// consistency only: the oracle checks are skipped).
+    #[arg(long, value_name = "CLASS")]
+    pub oracle: Option<String>,
+    /// Parameters of the oracle (as --params).
+    #[arg(long = "oracle-params", value_name = "TOML|@FILE", requires = "oracle")]
+    pub oracle_params: Option<String>,
+    /// A parameter of the plugin that makes it panic in the entry its value
+    /// names (`panic_in` in rtk's test fixtures): runs `panics-reported`,
+    /// which sets it to each entry of the plugin's kind in turn.
+    #[arg(long = "panic-param", value_name = "KEY")]
+    pub panic_param: Option<String>,
+    /// Do not run this check; it is reported as `skip` (repeatable). E.g.
+    /// `--skip furnace` for an integrator that does not estimate radiance.
+    #[arg(long, value_name = "CHECK")]
+    pub skip: Vec<String>,
+}
+
+const CONFORM_HELP: &str = "\
+Checks by kind (docs/plugins.md has the details):
+  objects     children, nearest-hit, ties-lowest-index, any-hit, bounds-contain-hits,
+              interval-respected, local-geom, nested-inside-bvh, bvh-nested-inside,
+              concurrent-queries
+  shaders     finite, energy, weight-matches-eval, pdf-matches-sample, pdf-integrates, reciprocity
+  cameras     finite, unit-directions, time-in-shutter, pixel-centres, not-mirrored,
+              deterministic, concurrent-queries
+  lights      finite, delta-light, points-on-light (delta lights); at-infinity,
+              li-matches-le, pdf-matches-sample, pdf-integrates (environment lights);
+              deterministic, concurrent-queries
+  integrators finite, furnace, black-without-light, deterministic, concurrent-queries
+  every kind  unknown-key-refused, panics-reported (with --panic-param)
+
+Examples:
+  rtk conform librtk_bvh.so --quick
+  rtk conform librtk_csg.so --params 'op = \"union\"' --oracle list
+  rtk conform librtk_motion.so --params 'keyframes = [{ time = 0.0, translate = [0.5, 0.0, 0.0] }]' \\
+      --oracle transform --oracle-params 'steps = [{ translate = [0.5, 0.0, 0.0] }]'
+  rtk conform librtk_mesh.so --params 'file = \"scenes/meshes/bunny.ply\"'
+  rtk conform librtk_normals.so --skip furnace --skip black-without-light
+  rtk conform librtk_panicky.so --panic-param panic_in";
+
+/// A check's outcome.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Status {
+    Pass,
+    Fail,
+    /// Not applicable, or not asked for: said why.
+    Skip,
 }
 
 /// One check's outcome.
 pub(crate) struct Check {
     pub name: &'static str,
-    pub pass: bool,
+    pub status: Status,
     pub detail: String,
+}
+
+impl Check {
+    /// Passed when `pass`, else failed.
+    pub fn new(name: &'static str, pass: bool, detail: impl Into<String>) -> Check {
+        Check {
+            name,
+            status: if pass { Status::Pass } else { Status::Fail },
+            detail: detail.into(),
+        }
+    }
+    /// Passed.
+    pub fn pass(name: &'static str, detail: impl Into<String>) -> Check {
+        Check::new(name, true, detail)
+    }
+    /// Not run, and why.
+    pub fn skip(name: &'static str, why: impl Into<String>) -> Check {
+        Check {
+            name,
+            status: Status::Skip,
+            detail: why.into(),
+        }
+    }
+    /// From a tally of failures (count, first): passes when there are none.
+    pub fn tally(name: &'static str, slot: &(u64, String), of: u64, what: &str) -> Check {
+        if slot.0 == 0 {
+            Check::pass(name, format!("{of} {what} agree"))
+        } else {
+            Check::new(
+                name,
+                false,
+                format!("{} of {of} {what} differ; first: {}", slot.0, slot.1),
+            )
+        }
+    }
+}
+
+impl Check {
+    /// From a tally of violations (count, first) of a property that must
+    /// hold for each of `of` cases.
+    pub fn held(name: &'static str, slot: &(u64, String), of: u64, what: &str) -> Check {
+        if slot.0 == 0 {
+            Check::pass(name, format!("held for {of} {what}"))
+        } else {
+            Check::new(
+                name,
+                false,
+                format!("{} of {of} {what} fail; first: {}", slot.0, slot.1),
+            )
+        }
+    }
+}
+
+/// Record a failure: its count, and the first one's description.
+pub(crate) fn note(slot: &mut (u64, String), msg: impl FnOnce() -> String) {
+    if slot.0 == 0 {
+        slot.1 = msg();
+    }
+    slot.0 += 1;
+}
+
+/// The checks of a run so far, and the one under way: a plugin failure
+/// while it runs fails it.
+pub(crate) struct Suite {
+    pub checks: Vec<Check>,
+    phase: &'static str,
+    skip: Vec<String>,
+}
+
+impl Suite {
+    /// The check now running.
+    pub fn at(&mut self, name: &'static str) {
+        self.phase = name;
+    }
+    /// Add an outcome.
+    pub fn push(&mut self, c: Check) {
+        self.checks.push(c);
+    }
+    /// Whether `name` is to be run (not named by --skip); when not, its
+    /// `skip` line is added.
+    pub fn wants(&mut self, name: &'static str) -> bool {
+        if self.skip.iter().any(|s| s == name) {
+            self.checks.push(Check::skip(name, "--skip"));
+            return false;
+        }
+        true
+    }
+}
+
+/// A mistake in the arguments (not the plugin's failure): an error, not a
+/// failed check.
+#[derive(Debug)]
+pub(crate) struct Usage(pub String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+/// A plugin's kind, as the suites tell them apart.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Kind {
+    Object,
+    Shader,
+    Camera,
+    Light,
+    Integrator,
+}
+
+/// Parameters for the plugin under test (or the oracle): a TOML table, its
+/// values written into each definition the suite makes.
+#[derive(Clone, Default)]
+pub(crate) struct Params {
+    pub table: toml::Table,
+}
+
+impl Params {
+    /// `--params` text: an inline table's contents or `@FILE`.
+    pub fn parse(arg: Option<&str>, flag: &str) -> Result<Params> {
+        let Some(arg) = arg else {
+            return Ok(Params::default());
+        };
+        let (text, base) = match arg.strip_prefix('@') {
+            Some(path) => {
+                let p = Path::new(path);
+                let text = std::fs::read_to_string(p)
+                    .with_context(|| format!("{flag} @{path}: reading {}", p.display()))?;
+                let dir = p.parent().map(Path::to_path_buf).unwrap_or_default();
+                (text, dir)
+            }
+            None => (arg.to_string(), PathBuf::new()),
+        };
+        // An inline table's contents: one per line or comma-separated.
+        let table: toml::Table = match toml::from_str(&text) {
+            Ok(t) => t,
+            Err(_) => toml::from_str::<toml::Table>(&format!("x = {{ {} }}", text.trim()))
+                .ok()
+                .and_then(|mut t| match t.remove("x") {
+                    Some(toml::Value::Table(t)) => Some(t),
+                    _ => None,
+                })
+                .with_context(|| {
+                    let e = toml::from_str::<toml::Table>(&text)
+                        .err()
+                        .map(|e| e.to_string())
+                        .unwrap_or_default();
+                    format!("{flag}: not a TOML table (`key = value, ...` or @FILE): {e}")
+                })?,
+        };
+        for k in ["class", "children"] {
+            if table.contains_key(k) {
+                bail!("{flag}: `{k}` is not a parameter here (the class is the plugin's; children are the suite's, see --children)");
+            }
+        }
+        let mut p = Params { table };
+        p.resolve_files(&base)?;
+        Ok(p)
+    }
+
+    /// Make relative paths of `file` and `*_file` keys absolute from `base`
+    /// (the suite's scenes are read from a scratch folder).
+    pub fn resolve_files(&mut self, base: &Path) -> Result<()> {
+        let cwd = std::env::current_dir().context("the working directory")?;
+        for (k, v) in self.table.iter_mut() {
+            if k == "file" || k.ends_with("_file") {
+                if let toml::Value::String(s) = v {
+                    let p = Path::new(s.as_str());
+                    if p.is_relative() {
+                        *s = cwd.join(base).join(p).display().to_string();
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A copy with `key = value` added (or replaced).
+    pub fn with(&self, key: &str, value: toml::Value) -> Params {
+        let mut p = self.clone();
+        p.table.insert(key.to_string(), value);
+        p
+    }
+
+    /// `key = value` lines, for a `[section]`.
+    pub fn lines(&self) -> String {
+        self.table
+            .iter()
+            .map(|(k, v)| format!("{} = {v}\n", key(k)))
+            .collect()
+    }
+
+    /// `key = value, ...`, for an inline table (empty when there are none).
+    pub fn inline(&self) -> String {
+        self.table
+            .iter()
+            .map(|(k, v)| format!("{} = {v}", key(k)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// As JSON text, which `create` receives.
+    pub fn json(&self) -> String {
+        serde_json::to_string(&self.table).unwrap_or_else(|_| "{}".into())
+    }
+
+    /// For reports: the inline form, shortened.
+    pub fn shown(&self) -> String {
+        let s = self.inline();
+        if s.is_empty() {
+            "none".into()
+        } else if s.chars().count() > 100 {
+            format!("{}...", s.chars().take(97).collect::<String>())
+        } else {
+            s
+        }
+    }
+}
+
+/// A TOML key, quoted unless bare.
+fn key(k: &str) -> String {
+    if !k.is_empty()
+        && k.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        k.to_string()
+    } else {
+        toml::Value::String(k.to_string()).to_string()
+    }
+}
+
+/// The definitions of class `class` in the ```toml examples of its README
+/// (`doc`), as parameter tables (`class` and `children` left out), in order.
+pub(crate) fn readme_examples(doc: &str, class: &str) -> Vec<Params> {
+    let mut out = Vec::new();
+    let mut block: Option<String> = None;
+    for line in doc.lines() {
+        let t = line.trim();
+        match &mut block {
+            None if t.starts_with("```toml") => block = Some(String::new()),
+            Some(b) if t.starts_with("```") => {
+                if let Ok(doc) = toml::from_str::<toml::Table>(b) {
+                    collect_defs(&toml::Value::Table(doc), class, &mut out);
+                }
+                block = None;
+            }
+            Some(b) => {
+                b.push_str(line);
+                b.push('\n');
+            }
+            None => {}
+        }
+    }
+    out
+}
+
+fn collect_defs(v: &toml::Value, class: &str, out: &mut Vec<Params>) {
+    let toml::Value::Table(t) = v else { return };
+    if t.get("class").and_then(|c| c.as_str()) == Some(class) {
+        let mut table = t.clone();
+        table.remove("class");
+        table.remove("children");
+        out.push(Params { table });
+        return;
+    }
+    for v in t.values() {
+        collect_defs(v, class, out);
+    }
 }
 
 fn class_of(a: &ConformArgs) -> Result<String> {
@@ -66,247 +403,136 @@ fn class_of(a: &ConformArgs) -> Result<String> {
     }
 }
 
-/// A random scene: its object definitions and the root's children (TOML
-/// instance expressions), spheres and small meshes, some listed twice.
-struct SceneDefs {
-    defs: String,
-    children: Vec<String>,
+/// A TOML string.
+pub(crate) fn toml_str(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
 }
 
-fn random_scene(b: &Bench, rng: &mut RngState, k: usize, n: usize) -> Result<SceneDefs> {
-    let mut defs = String::new();
-    let mut children = Vec::new();
-    for i in 0..n {
-        let c = DVec3::new(
-            rng.next_f64() * 8.0 - 4.0,
-            rng.next_f64() * 8.0 - 4.0,
-            rng.next_f64() * 8.0 - 4.0,
-        );
-        let r = 0.2 + rng.next_f64() * 1.2;
-        let name = format!("o{i}");
-        match rng.next_u32() % 3 {
-            0 => {
-                defs += &format!(
-                    "[objects.{name}]\nclass = \"sphere\"\ncenter = {}\nradius = {}\n",
-                    vec3f(c.as_vec3()),
-                    r as f32
-                )
-            }
-            1 => {
-                let m = uv_sphere(c, 4, 6, |_| r);
-                let p = b.write_obj(&format!("s{k}_{i}.obj"), &m)?;
-                defs += &mesh_def(&name, &p.display().to_string());
-            }
-            _ => {
-                let m = box_mesh(c, DVec3::splat(r * 0.7));
-                let p = b.write_obj(&format!("s{k}_{i}.obj"), &m)?;
-                defs += &mesh_def(&name, &p.display().to_string());
-            }
-        }
-        children.push(format!("\"{name}\""));
-        // Ties: the same object again, later (the earlier must win).
-        if rng.next_u32() & 3 == 0 {
-            children.push(format!("\"{name}\""));
-        }
-    }
-    Ok(SceneDefs { defs, children })
+/// What every suite works with.
+pub(crate) struct Cx<'a> {
+    pub args: &'a ConformArgs,
+    pub class: String,
+    pub kind: Kind,
+    /// The parameters in use (--params, or a README example).
+    pub params: Params,
+    /// --oracle-params.
+    pub oracle_params: Params,
+    /// --children.
+    pub children: Option<crate::conform_object::Shape>,
+    pub bench: Bench<'a>,
+    pub rng: RngState,
+    /// Threads queries may come from (the pool's).
+    pub threads: usize,
+    pub quick: bool,
+    /// The plugin's README.
+    pub doc: String,
 }
 
-fn mesh_def(name: &str, file: &str) -> String {
-    format!(
-        "[objects.{name}]\nclass = \"mesh\"\nfile = {}\naccel = \"none\"\n",
-        toml_str(file)
-    )
-}
-
-fn toml_str(s: &str) -> String {
-    format!("{s:?}")
-}
-
-fn world(defs: &str, class: &str, children: &[String]) -> String {
-    format!(
-        "{}{defs}[objects.world]\nclass = \"{class}\"\nchildren = [{}]\n",
-        header("world"),
-        children.join(", ")
-    )
-}
-
-/// Random rays through the box, and adversarial ones: aimed at sphere and
-/// mesh centres, axis-aligned (zero direction components), starting inside,
-/// grazing the box faces, with random times in the shutter interval.
-fn rays(rng: &mut RngState, n: usize, w: &World) -> Vec<Ray> {
-    let (lo, hi) = (w.bounds.min.v().as_dvec3(), w.bounds.max.v().as_dvec3());
-    let ext = hi - lo;
-    let pick = |rng: &mut RngState, pad: f64| {
-        lo - ext * pad
-            + DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * ext * (1.0 + 2.0 * pad)
-    };
-    let mut out = Vec::with_capacity(n);
-    for i in 0..n {
-        let o = pick(rng, 0.3);
-        let d = match i % 5 {
-            // Towards a point inside the box.
-            0 | 1 => (pick(rng, 0.0) - o).normalize_or(DVec3::X),
-            // Axis-aligned: two zero components.
-            2 => {
-                let mut d = DVec3::ZERO;
-                d[(rng.next_u32() % 3) as usize] = if rng.next_u32() & 1 == 0 { 1.0 } else { -1.0 };
-                d
-            }
-            // One zero component.
-            3 => {
-                let mut d = crate::stress::bench_unit(rng);
-                d[(rng.next_u32() % 3) as usize] = 0.0;
-                d.normalize_or(DVec3::Y)
-            }
-            _ => crate::stress::bench_unit(rng),
-        };
-        let mut r = Ray::new(o.as_vec3(), d.as_vec3().normalize_or(Vec3::X));
-        r.time = rng.next_f32();
-        out.push(r);
-    }
-    out
-}
-
-/// The same hit: the same t, the same child of the root, the same
-/// primitive at the leaf. Not the whole path: the levels between depend on
-/// how each side holds a primitive set (flattened into an aggregate that
-/// builds over primitives, or wrapped in its own `accel` under one that
-/// does not), which is not the plugin's to choose.
-fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
-    match (a, b) {
-        (None, None) => true,
-        (Some(a), Some(b)) => {
-            let leaf = |h: &Hit| h.stack[(h.depth as usize).saturating_sub(1)].prim;
-            a.t.to_bits() == b.t.to_bits()
-                && a.stack[0].index == b.stack[0].index
-                && leaf(a) == leaf(b)
-        }
-        _ => false,
-    }
-}
-
-fn show(h: &Option<Hit>) -> String {
-    match h {
-        None => "miss".into(),
-        Some(h) => {
-            let path: Vec<String> = (0..h.depth as usize)
-                .map(|l| format!("({},{})", h.stack[l].index, h.stack[l].prim))
-                .collect();
-            format!("t {:?} {}", h.t, path.join(""))
-        }
-    }
-}
-
-fn ray_text(r: &Ray) -> String {
-    format!(
-        "o {:?} d {:?} time {:?}",
-        r.origin.to_array(),
-        r.dir.to_array(),
-        r.time
-    )
-}
-
-/// Tallies of one comparison against the oracle.
-#[derive(Default)]
-struct Tally {
-    nearest: (u64, String),
-    ties: (u64, String),
-    anyhit: (u64, String),
-    bounds: (u64, String),
-    rays: u64,
-}
-
-fn note(slot: &mut (u64, String), msg: impl FnOnce() -> String) {
-    if slot.0 == 0 {
-        slot.1 = msg();
-    }
-    slot.0 += 1;
-}
-
-/// Trace `rays` under `test` and the oracle `oracle`; `dups` tells whether
-/// the scene lists a child twice (a disagreement on identity alone with equal
-/// `t` is then a tie broken wrongly).
-fn compare(test: &World, oracle: &World, rays: &[Ray], t: &mut Tally) -> Result<()> {
-    let (mut pt, mut po) = (Probe::new(test), Probe::new(oracle));
-    let b = test.bounds;
-    let (bmin, bmax) = (b.min.v(), b.max.v());
-    let slack = (bmax - bmin).max_element().max(1.0) * 1e-4;
-    for r in rays {
-        t.rays += 1;
-        let (ht, ho) = (pt.nearest(r)?, po.nearest(r)?);
-        if !same(&ht, &ho) {
-            let tie = matches!((&ht, &ho), (Some(a), Some(b)) if a.t.to_bits() == b.t.to_bits());
-            let slot = if tie { &mut t.ties } else { &mut t.nearest };
-            note(slot, || {
-                format!("{}: plugin {} list {}", ray_text(r), show(&ht), show(&ho))
-            });
-        }
-        if let Some(h) = &ho {
-            let p = r.origin.v() + r.dir.v() * h.t;
-            let inside =
-                (p.cmpge(bmin - Vec3::splat(slack)) & p.cmple(bmax + Vec3::splat(slack))).all();
-            if !inside {
-                note(&mut t.bounds, || {
-                    format!(
-                        "hit point {:?} outside the plugin's bounds {:?}..{:?}",
-                        p.to_array(),
-                        bmin.to_array(),
-                        bmax.to_array()
-                    )
-                });
-            }
-        }
-        let (ot, oo) = (pt.occluded(r)?, po.occluded(r)?);
-        if ot != oo {
-            note(&mut t.anyhit, || {
-                format!("{}: plugin occluded {ot}, list {oo}", ray_text(r))
-            });
-        }
-    }
-    Ok(())
-}
-
-fn verdict(name: &'static str, slot: &(u64, String), rays: u64) -> Check {
-    Check {
-        name,
-        pass: slot.0 == 0,
-        detail: if slot.0 == 0 {
-            format!("{rays} rays agree")
+impl Cx<'_> {
+    /// `quick` or `full`, by the run's size.
+    pub fn n(&self, quick: usize, full: usize) -> usize {
+        if self.quick {
+            quick
         } else {
-            format!("{} of {rays} rays differ; first: {}", slot.0, slot.1)
-        },
+            full
+        }
     }
 }
 
-/// Trace `rays` from `threads` threads at once (each its own context),
-/// twice over, against the single-thread answers.
-fn concurrent(w: &World, rays: &[Ray], threads: usize) -> Result<u64> {
-    let mut p = Probe::new(w);
-    let mut want = Vec::with_capacity(rays.len());
-    for r in rays {
-        want.push((p.nearest(r)?, p.occluded(r)?));
-    }
-    let bad = std::sync::atomic::AtomicU64::new(0);
-    std::thread::scope(|s| {
-        for ti in 0..threads {
-            let (want, bad) = (&want, &bad);
-            s.spawn(move || {
-                let mut ctx = TraceCtx::new(ti as u32, threads as u32, 0);
-                for _ in 0..2 {
-                    for (k, r) in rays.iter().enumerate() {
-                        let mut h = Hit::new();
-                        let got = w.root.intersect(&mut ctx, r, &mut h).then_some(h);
-                        let occ = w.root.occluded(&mut ctx, r);
-                        if !same(&got, &want[k].0) || occ != want[k].1 || ctx.failure().is_some() {
-                            bad.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        }
-                    }
-                }
-            });
+/// A scene that uses the plugin once, created with `params`: an object
+/// with `children` sphere children under a `list` root; a shader bound to a
+/// sphere; a light or a camera beside one; the integrator of a scene with a
+/// Lambert sphere and a point light.
+pub(crate) fn scene_using(kind: Kind, class: &str, params: &Params, children: usize) -> String {
+    let ball = "[objects.ball]\nclass = \"sphere\"\n";
+    let world = |kid: &str| format!("[objects.world]\nclass = \"list\"\nchildren = [{kid}]\n");
+    let def = |section: &str| {
+        format!(
+            "[{section}]\nclass = {}\n{}",
+            toml_str(class),
+            params.lines()
+        )
+    };
+    match kind {
+        Kind::Object => {
+            let mut s = header("world");
+            let mut kids = Vec::new();
+            for i in 0..children {
+                s += &format!(
+                    "[objects.c{i}]\nclass = \"sphere\"\ncenter = [{:?}, 0.0, 0.0]\nradius = 0.4\n",
+                    i as f64 - 1.0
+                );
+                kids.push(format!("\"c{i}\""));
+            }
+            s += &def("objects.x");
+            if children > 0 {
+                s += &format!("children = [{}]\n", kids.join(", "));
+            }
+            s + &world("\"x\"")
         }
-    });
-    Ok(bad.into_inner())
+        Kind::Shader => {
+            header("world")
+                + &def("shaders.s")
+                + ball
+                + &world("{ object = \"ball\", shader = \"s\" }")
+        }
+        Kind::Light => header("world") + &def("lights.l") + ball + &world("\"ball\""),
+        Kind::Camera => {
+            "[render]\nroot = \"world\"\nintegrator = \"normals\"\nwidth = 16\nheight = 12\n"
+                .to_string()
+                + &def("cameras.c")
+                + ball
+                + &world("\"ball\"")
+        }
+        Kind::Integrator => {
+            let inline = params.inline();
+            format!(
+                "[render]\nroot = \"world\"\nwidth = 8\nheight = 8\nintegrator = {{ class = {}{}{inline} }}\n\
+                 [cameras.c]\nclass = \"pinhole\"\n[lights.l]\nclass = \"point\"\nposition = [0.0, 4.0, 4.0]\nintensity = [10.0, 10.0, 10.0]\n\
+                 [shaders.white]\nclass = \"lambert\"\n",
+                toml_str(class),
+                if inline.is_empty() { "" } else { ", " }
+            ) + ball
+                + &world("{ object = \"ball\", shader = \"white\" }")
+        }
+    }
+}
+
+/// `unknown-key-refused`: the plugin refuses an unknown parameter, naming it.
+pub(crate) fn unknown_key(cx: &mut Cx, children: usize) -> Check {
+    let key = "conform_unknown_key";
+    let scene = scene_using(
+        cx.kind,
+        &cx.class,
+        &cx.params.with(key, toml::Value::Integer(1)),
+        children,
+    );
+    let err = cx.bench.build_error(&scene);
+    let pass = err.as_deref().is_some_and(|e| e.contains(key));
+    Check::new(
+        "unknown-key-refused",
+        pass,
+        match err {
+            None => format!("`{key} = 1` was accepted"),
+            Some(e) if e.contains(key) => "refused, naming the key".into(),
+            Some(e) => format!("refused without naming the key: {}", e.replace('\n', " ")),
+        },
+    )
+}
+
+/// The first line of an error, from the plugin's name on (not the
+/// scratch scene's file and line), shortened, for a report.
+pub(crate) fn brief(e: &str) -> String {
+    let l = e.lines().next().unwrap_or("");
+    let l = match (l.contains("case.toml:"), l.find("plugin `")) {
+        (true, Some(i)) => &l[i..],
+        _ => l,
+    };
+    if l.chars().count() > 160 {
+        format!("{}...", l.chars().take(157).collect::<String>())
+    } else {
+        l.to_string()
+    }
 }
 
 /// Run `rtk conform`.
@@ -314,19 +540,22 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
     let class = class_of(&a)?;
     let plugin = rtk_shell::plugins::load(&a.plugin, Some(&class))
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.plugin.display()))?;
-    if let rtk_shell::plugins::Module::Shader(m) = plugin.module {
-        let n = if a.quick { 4000 } else { 40000 };
-        let checks = crate::conform_shader::checks(m, &class, n)?;
-        return report(&a, &class, "shader", checks);
-    }
-    if plugin.kind.name() != "object" {
-        bail!(
-            "{}: `{class}` is a {} plugin; rtk conform checks object, aggregate and shader plugins",
-            a.plugin.display(),
-            plugin.kind.name()
-        );
-    }
-    drop(plugin);
+    let kind = match plugin.kind.name() {
+        "object" => Kind::Object,
+        "shader" => Kind::Shader,
+        "camera" => Kind::Camera,
+        "light" => Kind::Light,
+        "integrator" => Kind::Integrator,
+        other => bail!(
+            "{}: `{class}` is a {other} plugin, which rtk conform has no suite for",
+            a.plugin.display()
+        ),
+    };
+    let doc = plugin.doc.clone();
+    let shader_module = match plugin.module {
+        rtk_shell::plugins::Module::Shader(m) => Some(m),
+        _ => None,
+    };
     // A plugin folder holding just this library, searched first.
     let folder = tempfile::Builder::new().prefix("rtk-conform").tempdir()?;
     let lib = folder
@@ -337,193 +566,177 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
     let size = if a.quick { Size::Quick } else { Size::Full };
     let mut extra = vec![folder.path().to_path_buf()];
     extra.extend(a.plugin_path.iter().cloned());
-    let mut b = Bench::new(size, &extra, pool)?;
-    let (scenes, nobj, nrays) = if a.quick {
-        (4, 12, 600)
-    } else {
-        (20, 30, 5000)
-    };
-    // Queries may come from as many threads as the scenes were built for.
-    let threads = pool.current_num_threads().max(1);
-    let mut checks = Vec::new();
-    let mut rng = RngState::seeded(0xC0F0);
-
-    // Is it an aggregate? It must accept a child.
-    let probe = world(
-        "[objects.a]\nclass = \"sphere\"\n",
-        &class,
-        &["\"a\"".to_string()],
-    );
-    let aggregate = b.build_error(&probe).is_none();
-    if !aggregate {
-        checks.push(Check {
-            name: "aggregate",
-            pass: true,
-            detail: format!("`{class}` takes no children: checked as a primitive"),
-        });
+    let bench = Bench::new(size, &extra, pool)?;
+    if a.children.is_some() && kind != Kind::Object {
+        bail!("--children is for object plugins; `{class}` is a {kind:?} plugin");
     }
-
-    if aggregate {
-        let mut t = Tally::default();
-        let mut nest_in = Tally::default();
-        let mut nest_out = Tally::default();
-        let mut conc_bad = 0;
-        let mut conc_rays = 0;
-        for k in 0..scenes {
-            let s = random_scene(&b, &mut rng, k, nobj)?;
-            let oracle = b.scene(&world(&s.defs, "list", &s.children))?;
-            let test = b.scene(&world(&s.defs, &class, &s.children))?;
-            let rs = rays(&mut rng, nrays, &oracle);
-            compare(&test, &oracle, &rs, &mut t)?;
-            // Nesting: the plugin inside bvh, and bvh inside the plugin.
-            let defs_in = format!(
-                "{}[objects.inner]\nclass = \"{class}\"\nchildren = [{}]\n",
-                s.defs,
-                s.children.join(", ")
-            );
-            let w_in = b.scene(&world(&defs_in, "bvh", &["\"inner\"".into()]))?;
-            let o_in = b.scene(&world(
-                &defs_in.replace(
-                    &format!("class = \"{class}\"\nchildren"),
-                    "class = \"list\"\nchildren",
-                ),
-                "list",
-                &["\"inner\"".into()],
-            ))?;
-            compare(&w_in, &o_in, &rs, &mut nest_in)?;
-            let defs_out = format!(
-                "{}[objects.inner]\nclass = \"bvh\"\nchildren = [{}]\n",
-                s.defs,
-                s.children.join(", ")
-            );
-            let w_out = b.scene(&world(
-                &defs_out,
-                &class,
-                &["\"inner\"".into(), s.children[0].clone()],
-            ))?;
-            let o_out = b.scene(&world(
-                &defs_out,
-                "list",
-                &["\"inner\"".into(), s.children[0].clone()],
-            ))?;
-            compare(&w_out, &o_out, &rs, &mut nest_out)?;
-            if k == 0 {
-                conc_bad += concurrent(&test, &rs, threads)?;
-                conc_rays += rs.len() as u64 * 2 * threads as u64;
+    if a.oracle.is_some() && kind != Kind::Object {
+        bail!("--oracle is for object plugins; `{class}` is a {kind:?} plugin");
+    }
+    let mut cx = Cx {
+        args: &a,
+        class: class.clone(),
+        kind,
+        params: Params::parse(a.params.as_deref(), "--params")?,
+        oracle_params: Params::parse(a.oracle_params.as_deref(), "--oracle-params")?,
+        children: a
+            .children
+            .as_deref()
+            .map(crate::conform_object::parse_children)
+            .transpose()?,
+        bench,
+        rng: RngState::seeded(0xC0F0),
+        // Queries may come from as many threads as the scenes were built for.
+        threads: pool.current_num_threads().max(1),
+        quick: a.quick,
+        doc,
+    };
+    let mut suite = Suite {
+        checks: Vec::new(),
+        phase: "create",
+        skip: a.skip.clone(),
+    };
+    let mut label = match kind {
+        Kind::Object => "object",
+        Kind::Shader => "shader",
+        Kind::Camera => "camera",
+        Kind::Light => "light",
+        Kind::Integrator => "integrator",
+    };
+    let res = match kind {
+        Kind::Object => crate::conform_object::checks(&mut cx, &mut suite).map(|shape| {
+            if shape.is_aggregate() {
+                label = "aggregate";
             }
-        }
-        checks.push(verdict("nearest-hit", &t.nearest, t.rays));
-        checks.push(verdict("ties-lowest-index", &t.ties, t.rays));
-        checks.push(verdict("any-hit", &t.anyhit, t.rays));
-        checks.push(verdict("bounds-contain-hits", &t.bounds, t.rays));
-        let merge = |x: &Tally| {
-            let s = [&x.nearest, &x.ties, &x.anyhit]
-                .iter()
-                .fold((0, String::new()), |acc, s| {
-                    if acc.0 == 0 {
-                        (s.0, s.1.clone())
-                    } else {
-                        (acc.0 + s.0, acc.1)
-                    }
-                });
-            (s, x.rays)
-        };
-        let (s, n) = merge(&nest_in);
-        checks.push(verdict("nested-inside-bvh", &s, n));
-        let (s, n) = merge(&nest_out);
-        checks.push(verdict("bvh-nested-inside", &s, n));
-        checks.push(Check {
-            name: "concurrent-queries",
-            pass: conc_bad == 0,
-            detail: format!(
-                "{} threads: {conc_bad} of {conc_rays} answers differ from one thread's",
-                threads
-            ),
-        });
-    } else {
-        // A primitive: under bvh as under list, bounds, concurrency.
-        let defs = format!("[objects.p]\nclass = \"{class}\"\n");
-        let kids = ["\"p\"".to_string(), "\"p\"".to_string()];
-        let oracle = b.scene(&world(&defs, "list", &kids))?;
-        let test = b.scene(&world(&defs, "bvh", &kids))?;
-        let rs = rays(&mut rng, nrays * scenes, &oracle);
-        let mut t = Tally::default();
-        compare(&test, &oracle, &rs, &mut t)?;
-        checks.push(verdict("nested-inside-bvh", &t.nearest, t.rays));
-        checks.push(verdict("ties-lowest-index", &t.ties, t.rays));
-        checks.push(verdict("any-hit", &t.anyhit, t.rays));
-        checks.push(verdict("bounds-contain-hits", &t.bounds, t.rays));
-        let bad = concurrent(&test, &rs, threads)?;
-        checks.push(Check {
-            name: "concurrent-queries",
-            pass: bad == 0,
-            detail: format!(
-                "{} threads: {bad} answers differ from one thread's",
-                threads
-            ),
-        });
-    }
-
-    // Parameters: an unknown key is refused, naming it.
-    let key = "conform_unknown_key";
-    let bad = if aggregate {
-        world(
-            &format!("[objects.a]\nclass = \"sphere\"\n[objects.x]\nclass = \"{class}\"\n{key} = 1\nchildren = [\"a\"]\n"),
-            "list",
-            &["\"x\"".into()],
-        )
-    } else {
-        world(
-            &format!("[objects.x]\nclass = \"{class}\"\n{key} = 1\n"),
-            "list",
-            &["\"x\"".into()],
-        )
+        }),
+        Kind::Shader => shader_module
+            .context("the shader's module")
+            .and_then(|m| crate::conform_shader::checks(m, &mut cx, &mut suite)),
+        Kind::Camera => crate::conform_camera::checks(&mut cx, &mut suite),
+        Kind::Light => crate::conform_light::checks(&mut cx, &mut suite),
+        Kind::Integrator => crate::conform_integrator::checks(&mut cx, &mut suite),
     };
-    let err = b.build_error(&bad);
-    checks.push(Check {
-        name: "unknown-key-refused",
-        pass: err.as_deref().is_some_and(|e| e.contains(key)),
-        detail: match err {
-            None => format!("`{key} = 1` was accepted"),
-            Some(e) if e.contains(key) => "refused, naming the key".into(),
-            Some(e) => format!("refused without naming the key: {}", e.replace('\n', " ")),
-        },
-    });
-
-    let kind = if aggregate { "aggregate" } else { "object" };
-    report(&a, &class, kind, checks)
+    if let Err(e) = res {
+        if e.downcast_ref::<Usage>().is_some() {
+            return Err(e);
+        }
+        let phase = suite.phase;
+        suite.push(Check::new(
+            phase,
+            false,
+            format!("stopped: {}", brief(&format!("{e:#}"))),
+        ));
+    }
+    // Every --skip must name a check of this suite (a misspelt one would
+    // silently run it).
+    for s in &a.skip {
+        if !suite.checks.iter().any(|c| c.name == s) {
+            let names: Vec<&str> = suite.checks.iter().map(|c| c.name).collect();
+            bail!(
+                "--skip {s}: the {label} suite has no check of that name (its checks: {})",
+                names.join(", ")
+            );
+        }
+    }
+    for c in suite.checks.iter_mut() {
+        if a.skip.iter().any(|s| s == c.name) && c.status != Status::Skip {
+            *c = Check::skip(c.name, "--skip");
+        }
+    }
+    report(&a, &class, label, &cx.params, suite.checks)
 }
 
 /// Print the checks (lines or JSON); an error when any failed.
-fn report(a: &ConformArgs, class: &str, kind: &str, checks: Vec<Check>) -> Result<()> {
-    let failed = checks.iter().filter(|c| !c.pass).count();
+fn report(
+    a: &ConformArgs,
+    class: &str,
+    kind: &str,
+    params: &Params,
+    checks: Vec<Check>,
+) -> Result<()> {
+    let failed = checks.iter().filter(|c| c.status == Status::Fail).count();
+    let skipped = checks.iter().filter(|c| c.status == Status::Skip).count();
     if a.json {
         let list: Vec<_> = checks
             .iter()
-            .map(|c| serde_json::json!({"check": c.name, "pass": c.pass, "detail": c.detail}))
+            .map(|c| {
+                serde_json::json!({"check": c.name, "pass": c.status != Status::Fail,
+                    "status": match c.status { Status::Pass => "pass", Status::Fail => "fail", Status::Skip => "skip" },
+                    "detail": c.detail})
+            })
             .collect();
         println!(
             "{}",
             serde_json::json!({"plugin": a.plugin.display().to_string(), "class": class,
-                "kind": kind, "aggregate": kind == "aggregate", "checks": list, "failed": failed})
+                "kind": kind, "aggregate": kind == "aggregate", "params": params.inline(),
+                "checks": list, "failed": failed, "skipped": skipped})
         );
     } else {
         for c in &checks {
-            println!(
-                "{}  {:<22} {}",
-                if c.pass { "pass" } else { "FAIL" },
-                c.name,
-                c.detail
-            );
+            match c.status {
+                Status::Pass => println!("pass  {:<22} {}", c.name, c.detail),
+                Status::Fail => println!("FAIL  {:<22} {}", c.name, c.detail),
+                Status::Skip => println!("skip  {:<22} ({})", c.name, c.detail),
+            }
         }
         println!(
-            "{class} ({}): {} checks, {failed} failed",
+            "{class} ({}): {} checks, {failed} failed{}",
             a.plugin.display(),
-            checks.len()
+            checks.len(),
+            if skipped > 0 {
+                format!(", {skipped} skipped")
+            } else {
+                String::new()
+            }
         );
     }
     if failed > 0 {
         bail!("`{class}` fails {failed} conformance check(s)");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_parse_inline_and_write_back() {
+        let p = Params::parse(
+            Some(r#"op = "union", keyframes = [{ time = 0.0, rotate = { axis = [0.0, 1.0, 0.0], angle = 30.0 } }]"#),
+            "--params",
+        )
+        .unwrap();
+        assert_eq!(p.table["op"].as_str(), Some("union"));
+        let back: toml::Table = toml::from_str(&p.lines()).unwrap();
+        assert_eq!(back, p.table);
+        let inline: toml::Table = toml::from_str(&format!("x = {{ {} }}", p.inline())).unwrap();
+        assert_eq!(inline["x"].as_table().unwrap(), &p.table);
+        let lines = Params::parse(Some("op = \"union\"\nn = 2"), "--params").unwrap();
+        assert_eq!(lines.table.len(), 2);
+        assert!(Params::parse(Some("class = \"x\""), "--params").is_err());
+        assert!(Params::parse(Some("op = "), "--params").is_err());
+    }
+
+    #[test]
+    fn file_keys_become_absolute() {
+        let p = Params::parse(Some(r#"file = "m/x.ply", other = "y""#), "--params").unwrap();
+        assert!(Path::new(p.table["file"].as_str().unwrap()).is_absolute());
+        assert_eq!(p.table["other"].as_str(), Some("y"));
+    }
+
+    #[test]
+    fn readme_examples_are_found() {
+        let doc = "text\n```toml\n[objects.a]\nclass = \"bicubic\"\nfile = \"t.bpt\"\n\n[objects.w]\nclass = \"list\"\nchildren = [\"a\"]\n```\n\
+                   ```toml\n[objects.b]\nclass = \"bicubic\"\npatches = [[[0.0, 0.0, 0.0]]]\n```\n";
+        let ex = readme_examples(doc, "bicubic");
+        assert_eq!(ex.len(), 2);
+        assert!(ex[0].table.contains_key("file"));
+        assert!(ex[1].table.contains_key("patches"));
+        let int = "```toml\n[render]\nintegrator = { class = \"path\", rr_depth = 5 }\n```\n";
+        assert_eq!(
+            readme_examples(int, "path")[0].table["rr_depth"].as_integer(),
+            Some(5)
+        );
+    }
 }

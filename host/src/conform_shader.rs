@@ -18,7 +18,7 @@
 //! saying so: it is allowed, and the path tracer then does not weigh its
 //! samples by MIS.
 
-use crate::conform::Check;
+use crate::conform::{brief, note, readme_examples, unknown_key, Check, Cx, Suite};
 use anyhow::{anyhow, Result};
 use rtk_kernel::abi::{geom_mask, lobe, Float3, LocalGeom, ShaderModuleRef};
 use rtk_kernel::glam::Vec3;
@@ -26,8 +26,8 @@ use rtk_kernel::host::{CreateArgs, Shader};
 use rtk_kernel::sdk::shading::uniform_sphere;
 use rtk_kernel::{RngState, TraceCtx};
 
-/// The checks for shader class `class` from `module`, `n` samples each.
-pub fn checks(module: ShaderModuleRef, class: &str, n: usize) -> Result<Vec<Check>> {
+/// The checks for shader class `cx.class` from `module`.
+pub fn checks(module: ShaderModuleRef, cx: &mut Cx, suite: &mut Suite) -> Result<()> {
     let args = CreateArgs {
         scene_dir: ".",
         name: "shaders.conform",
@@ -35,8 +35,37 @@ pub fn checks(module: ShaderModuleRef, class: &str, n: usize) -> Result<Vec<Chec
         image_height: 1,
         origin: [0.0; 3],
     };
-    let shader = Shader::create(module, "{}", &args)
-        .map_err(|e| anyhow!("`{class}` refused its default parameters: {e}"))?;
+    suite.at("create");
+    let class = cx.class.clone();
+    let shader = match Shader::create(module, &cx.params.json(), &args) {
+        Ok(s) => s,
+        Err(e) if cx.args.params.is_none() => {
+            // Parameters it cannot do without: its README's examples.
+            let mut found = None;
+            for mut ex in readme_examples(&cx.doc, &class) {
+                if ex.resolve_files(std::path::Path::new("")).is_err() {
+                    continue;
+                }
+                if let Ok(s) = Shader::create(module, &ex.json(), &args) {
+                    suite.push(Check::pass(
+                        "params",
+                        format!(
+                            "none refused ({}); using the README's example: {}",
+                            brief(&e.to_string()),
+                            ex.shown()
+                        ),
+                    ));
+                    cx.params = ex;
+                    found = Some(s);
+                    break;
+                }
+            }
+            found.ok_or_else(|| anyhow!("`{class}` refused to be created without parameters: {e} (nor do the README's examples work; give --params)"))?
+        }
+        Err(e) => return Err(anyhow!("`{class}` refused --params: {e}")),
+    };
+    let n = cx.n(4000, 40000);
+    suite.at("finite");
     let mut ctx = TraceCtx::new(0, 1, 0);
     let mut g = LocalGeom::EMPTY;
     g.p = Vec3::ZERO.into();
@@ -153,58 +182,59 @@ pub fn checks(module: ShaderModuleRef, class: &str, n: usize) -> Result<Vec<Chec
             }
         }
     }
-    let mut out = vec![
-        count_check("finite", &nonfinite),
-        Check {
-            name: "energy",
-            pass: energy.0,
-            detail: if energy.0 {
-                "mean weight ≤ 1 at every direction tried".into()
-            } else {
-                energy.1
-            },
+    if let Some((c, m)) = ctx.failure() {
+        return Err(anyhow!("plugin `{c}` {m}"));
+    }
+    suite.push(count_check("finite", &nonfinite));
+    suite.push(Check::new(
+        "energy",
+        energy.0,
+        if energy.0 {
+            "mean weight ≤ 1 at every direction tried".into()
+        } else {
+            energy.1
         },
-        count_check("weight-matches-eval", &weight_bad),
-    ];
+    ));
+    suite.push(count_check("weight-matches-eval", &weight_bad));
     if pdf_known {
-        out.push(count_check("pdf-matches-sample", &pdf_bad));
-        out.push(Check {
-            name: "pdf-integrates",
-            pass: integral_bad.0,
-            detail: if integral_bad.0 {
+        suite.push(count_check("pdf-matches-sample", &pdf_bad));
+        suite.push(Check::new(
+            "pdf-integrates",
+            integral_bad.0,
+            if integral_bad.0 {
                 "∫ pdf dω matches the non-delta share at every direction tried".into()
             } else {
                 integral_bad.1
             },
-        });
+        ));
     } else {
-        out.push(Check {
-            name: "pdf",
-            pass: true,
-            detail: "the shader reports no density: not checked (no MIS for it)".into(),
-        });
+        let why = "the shader reports no density (no MIS for it)";
+        suite.push(Check::skip("pdf-matches-sample", why));
+        suite.push(Check::skip("pdf-integrates", why));
     }
-    if !transmits {
-        out.push(count_check("reciprocity", &recip_bad));
+    if transmits {
+        suite.push(Check::skip(
+            "reciprocity",
+            "the shader transmits: f(wo, wi) = f(wi, wo) does not hold across an interface",
+        ));
+    } else {
+        suite.push(count_check("reciprocity", &recip_bad));
     }
-    Ok(out)
-}
-
-fn note(slot: &mut (u64, String), msg: impl FnOnce() -> String) {
-    if slot.0 == 0 {
-        slot.1 = msg();
-    }
-    slot.0 += 1;
+    suite.at("unknown-key-refused");
+    let c = unknown_key(cx, 0);
+    suite.push(c);
+    crate::conform_panics::run(cx, suite, 0)?;
+    Ok(())
 }
 
 fn count_check(name: &'static str, slot: &(u64, String)) -> Check {
-    Check {
+    Check::new(
         name,
-        pass: slot.0 == 0,
-        detail: if slot.0 == 0 {
+        slot.0 == 0,
+        if slot.0 == 0 {
             "held on every sample".into()
         } else {
             format!("{} failures; first: {}", slot.0, slot.1)
         },
-    }
+    )
 }

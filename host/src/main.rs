@@ -5,6 +5,11 @@ mod analytic;
 mod bench_aggregate;
 mod checkpoint;
 mod conform;
+mod conform_camera;
+mod conform_integrator;
+mod conform_light;
+mod conform_object;
+mod conform_panics;
 mod conform_shader;
 mod converge;
 mod images;
@@ -88,9 +93,9 @@ enum Command {
     /// Time an aggregate against others on meshes, side by side in one run:
     /// build time, memory, Mrays/s (primary, incoherent, occluded), ratios.
     BenchAggregate(bench_aggregate::BenchArgs),
-    /// Run the conformance suite of object and aggregate plugins against a
-    /// plugin library: one line per check, pass or fail; exits non-zero on
-    /// any failure.
+    /// Run the conformance suite of a plugin library of any kind (object,
+    /// aggregate, shader, camera, light, integrator): one line per check,
+    /// pass, FAIL or skip (with why); exits non-zero on any failure.
     Conform(conform::ConformArgs),
 }
 

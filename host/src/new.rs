@@ -109,6 +109,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "pinhole",
     "point",
     "polygon",
+    "raycls",
     "roughconductor",
     "sphere",
     "thinlens",

@@ -114,6 +114,14 @@ pub fn fixtures_dir() -> &'static Path {
             "rtk_brokenbounds",
             "-p",
             "rtk_brokenrace",
+            "-p",
+            "rtk_panickyshader",
+            "-p",
+            "rtk_panickylight",
+            "-p",
+            "rtk_panickycamera",
+            "-p",
+            "rtk_panickyintegrator",
             "--manifest-path",
         ])
         .arg(&manifest)

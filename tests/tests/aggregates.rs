@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// The aggregates that must match the list (every one that is built).
-const AGGREGATES: &[&str] = &["bvh", "grid", "octree", "kdtree", "slabs"];
+const AGGREGATES: &[&str] = &["bvh", "grid", "octree", "kdtree", "slabs", "raycls"];
 
 /// A random scene; `inner` is the class of the nested cluster.
 fn scene(seed: u64, dir: &Path, inner: &str) -> String {
@@ -285,6 +285,203 @@ fn bvh_options_match_the_list() {
         for seed in [1, 2, 3] {
             check_with(seed, "bvh", extra);
         }
+    }
+}
+
+/// `raycls` at its extremes: one candidate per cell, no subdivision at all
+/// (the sorted root lists alone), and a budget too small for its roots (so
+/// every ray takes the exhaustive path) still answer exactly as `list`.
+#[test]
+fn raycls_matches_the_list_at_any_setting() {
+    for extra in [
+        "max_candidates = 1",
+        "max_depth = 0",
+        "max_candidates = 2\nmax_depth = 64",
+        "max_memory_mb = 0.0001",
+    ] {
+        check_with(3, "raycls", extra);
+    }
+}
+
+/// `count` small random triangles in [-8, 8]³ as an OBJ file.
+fn small_soup(r: &mut Rng, count: usize) -> String {
+    let mut s = String::new();
+    for t in 0..count {
+        let c = [r.f(-8.0, 8.0), r.f(-8.0, 8.0), r.f(-8.0, 8.0)];
+        for _ in 0..3 {
+            let v = [
+                c[0] + r.f(-0.4, 0.4),
+                c[1] + r.f(-0.4, 0.4),
+                c[2] + r.f(-0.4, 0.4),
+            ];
+            writeln!(s, "v {} {} {}", v[0], v[1], v[2]).unwrap();
+        }
+        writeln!(s, "f {} {} {}", 3 * t + 1, 3 * t + 2, 3 * t + 3).unwrap();
+    }
+    s
+}
+
+/// A scene of one `small_soup` mesh of `count` triangles, flattened into a
+/// root of class `class` with the parameter lines `extra`.
+fn soup_scene(dir: &Path, count: usize, class: &str, extra: &str) -> std::path::PathBuf {
+    let mesh = dir.join("soup.obj");
+    if !mesh.exists() {
+        std::fs::write(&mesh, small_soup(&mut Rng(0x50FA), count)).unwrap();
+    }
+    let p = dir.join(format!("soup-{class}.toml"));
+    std::fs::write(
+        &p,
+        format!(
+            "[render]\nroot = \"world\"\nintegrator = \"normals\"\n[cameras.c]\nclass = \"pinhole\"\n\
+             [objects.soup]\nclass = \"mesh\"\nfile = \"soup.obj\"\naccel = \"none\"\n\
+             [objects.world]\nclass = \"{class}\"\n{extra}\nchildren = [\"soup\"]\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+/// Rays in the pattern a renderer casts: from four eye points (outside and
+/// inside the scene) in every direction, and from random points; one in 40
+/// from a million units away, aimed near the scene, and one in 40 from 1e14
+/// along z, nearly (too far for `raycls` to classify: it tests every
+/// primitive).
+fn eye_rays(n: usize) -> Vec<[f32; 8]> {
+    let mut r = Rng(0xE7E5);
+    let eyes = [
+        [0.0, 3.0, 25.0],
+        [-20.0, 10.0, -4.0],
+        [0.5, 0.25, -0.75],
+        [4.0, -4.0, 4.0],
+    ];
+    (0..n)
+        .map(|k| {
+            let o = if k % 5 == 4 {
+                [r.f(-12.0, 12.0), r.f(-12.0, 12.0), r.f(-12.0, 12.0)]
+            } else {
+                eyes[k % 4]
+            };
+            let mut d = [r.f(-1.0, 1.0), r.f(-1.0, 1.0), r.f(-1.0, 1.0)];
+            if k % 4 == 0 {
+                // Towards the scene, as a camera looks.
+                d = [d[0] * 0.3, d[1] * 0.3, -1.0];
+            }
+            if k % 40 == 3 {
+                let aim = [r.f(-9.0, 9.0), r.f(-9.0, 9.0), r.f(-9.0, 9.0)];
+                let o = [6e5, -4.8e5, 6.4e5];
+                let d = [aim[0] - o[0], aim[1] - o[1], aim[2] - o[2]];
+                return [o[0], o[1], o[2], d[0], d[1], d[2], 0.0, f32::INFINITY];
+            }
+            if k % 40 == 23 {
+                let (x, y) = (r.f(-9.0, 9.0), r.f(-9.0, 9.0));
+                let (a, b) = (r.f(-5.0, 5.0) * 1e-14, r.f(-5.0, 5.0) * 1e-14);
+                return [x, y, 1e14, a, b, -1.0, 0.0, f32::INFINITY];
+            }
+            let t_max = if k % 7 == 0 { 12.0 } else { f32::INFINITY };
+            [o[0], o[1], o[2], d[0], d[1], d[2], 0.0, t_max]
+        })
+        .collect()
+}
+
+/// `rtk trace` with `threads` threads, one pass; the hit file and stderr.
+fn trace_threads(scene: &Path, rays: &Path, threads: u32, occluded: bool) -> (Vec<u8>, String) {
+    let out = scene.with_extension(format!("{threads}-{occluded}.hits"));
+    let threads = threads.to_string();
+    let mut args = vec![
+        "trace",
+        scene.to_str().unwrap(),
+        "--rays",
+        rays.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        &threads,
+        "--json",
+    ];
+    if occluded {
+        args.push("--occluded");
+    }
+    let run = Run::from(rtk(&args).output().unwrap());
+    assert!(run.ok, "{}", run.stderr);
+    (std::fs::read(out).unwrap(), run.stderr)
+}
+
+/// `raycls` builds its cells while tracing, from every thread at once: 8
+/// threads on a fresh structure (36,864 rays, nine chunks of the trace's
+/// 4096, so all of them run; most rays from four shared eye points, so they
+/// race for the same cells) give, byte for byte, the hits of one thread,
+/// and those are `list`'s.
+#[test]
+fn raycls_builds_concurrently_with_the_answers_of_one_thread() {
+    let dir = tempfile::tempdir().unwrap();
+    let rays = dir.path().join("rays.bin");
+    write_rays(&rays, &eye_rays(9 * 4096));
+    let list = soup_scene(dir.path(), 1500, "list", "");
+    let scene = soup_scene(dir.path(), 1500, "raycls", "max_candidates = 4");
+    for occluded in [false, true] {
+        let (want, _) = trace_threads(&list, &rays, 2, occluded);
+        let (one, _) = trace_threads(&scene, &rays, 1, occluded);
+        let (eight, _) = trace_threads(&scene, &rays, 8, occluded);
+        let m = mismatches(&one, &eight);
+        assert!(
+            m.is_empty(),
+            "8 threads against 1 (occluded {occluded}): {} mismatches, e.g. {:?}",
+            m.len(),
+            &m[..m.len().min(5)]
+        );
+        let m = mismatches(&want, &one);
+        assert!(
+            m.is_empty(),
+            "raycls against list (occluded {occluded}): {} mismatches, e.g. {:?}",
+            m.len(),
+            &m[..m.len().min(5)]
+        );
+    }
+}
+
+/// The figures of a `raycls stats:` line on stderr.
+fn raycls_stats(stderr: &str) -> std::collections::HashMap<String, u64> {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("raycls stats:"))
+        .unwrap_or_else(|| panic!("no stats line in {stderr}"));
+    line["raycls stats:".len()..]
+        .split_whitespace()
+        .filter_map(|kv| {
+            let (k, v) = kv.split_once('=')?;
+            Some((k.to_string(), v.parse().ok()?))
+        })
+        .collect()
+}
+
+/// A 2 MiB budget on 4000 triangles with `max_candidates = 1` (the table
+/// and the roots take about 0.7 MiB of it): the cells the rays ask for
+/// would take far more (splits are refused), yet the answers are `list`'s,
+/// and the bytes counted never passed the budget.
+#[test]
+fn raycls_stays_within_its_memory_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let rays = dir.path().join("rays.bin");
+    write_rays(&rays, &eye_rays(8_000));
+    let list = soup_scene(dir.path(), 4000, "list", "");
+    let extra = "max_candidates = 1\nmax_depth = 64\nmax_memory_mb = 2\nstats = true";
+    let scene = soup_scene(dir.path(), 4000, "raycls", extra);
+    for occluded in [false, true] {
+        let (want, _) = trace_threads(&list, &rays, 2, occluded);
+        let (got, stderr) = trace_threads(&scene, &rays, 2, occluded);
+        let m = mismatches(&want, &got);
+        assert!(
+            m.is_empty(),
+            "raycls under its budget against list (occluded {occluded}): {} mismatches, e.g. {:?}",
+            m.len(),
+            &m[..m.len().min(5)]
+        );
+        let s = raycls_stats(&stderr);
+        assert_eq!(s["budget_bytes"], 2 << 20, "{stderr}");
+        assert!(s["refused"] > 0, "the budget was never reached: {stderr}");
+        assert!(s["peak_bytes"] <= s["budget_bytes"], "{stderr}");
+        assert!(s["memory_bytes"] <= s["peak_bytes"], "{stderr}");
+        assert!(s["cells"] > 20, "{stderr}");
     }
 }
 

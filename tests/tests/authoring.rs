@@ -129,22 +129,46 @@ fn bench_aggregate_prints_one_row_per_aggregate_and_set() {
 }
 
 fn conform(lib: &std::path::Path) -> Run {
-    Run::from(
-        rtk(&[
-            "conform",
-            lib.to_str().unwrap(),
-            "--quick",
-            "--plugin-path",
-            bin_dir().to_str().unwrap(),
-        ])
-        .output()
-        .unwrap(),
-    )
+    conform_with(lib, &[])
+}
+
+/// `rtk conform LIB --quick` with more arguments.
+fn conform_with(lib: &std::path::Path, extra: &[&str]) -> Run {
+    Run::from(conform_output(lib, extra))
+}
+
+fn conform_output(lib: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "conform",
+        lib.to_str().unwrap(),
+        "--quick",
+        "--plugin-path",
+        bin_dir().to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    rtk(&args).output().unwrap()
+}
+
+fn built_in(class: &str) -> std::path::PathBuf {
+    bin_dir().join(format!("librtk_{class}.so"))
+}
+
+fn fixture(class: &str) -> std::path::PathBuf {
+    fixtures_dir().join(format!("librtk_{class}.so"))
+}
+
+/// Passes: no FAIL line, and each of `lines` printed.
+fn passes(what: &str, r: &Run, lines: &[&str]) {
+    assert!(r.ok, "{what}:\n{}\n{}", r.stdout, r.stderr);
+    assert!(!r.stdout.contains("FAIL"), "{what}:\n{}", r.stdout);
+    for l in lines {
+        assert!(r.stdout.contains(l), "{what}: no `{l}` in\n{}", r.stdout);
+    }
 }
 
 #[test]
 fn conform_passes_every_built_in_aggregate() {
-    for class in ["list", "bvh", "grid", "octree", "kdtree"] {
+    for class in ["list", "bvh", "grid", "octree", "kdtree", "slabs", "raycls"] {
         let lib = bin_dir().join(format!("librtk_{class}.so"));
         let r = conform(&lib);
         assert!(r.ok, "{class}:\n{}\n{}", r.stdout, r.stderr);
@@ -219,4 +243,379 @@ fn conform_names_each_broken_fixtures_check() {
         );
         assert!(r.stderr.contains(fixture), "{}", r.stderr);
     }
+}
+
+/// Every built-in object class: primitives as they are (those that need
+/// parameters from `--params` or their README's example), classes with a
+/// fixed number of children against an oracle of another construction.
+#[test]
+fn conform_passes_every_built_in_object() {
+    for class in ["sphere", "disk", "cylinder", "cone", "torus", "fractal"] {
+        let r = conform(&built_in(class));
+        passes(
+            class,
+            &r,
+            &[
+                "pass  children               none: checked as a primitive",
+                "pass  nested-inside-bvh",
+                "pass  interval-respected",
+                "pass  local-geom",
+            ],
+        );
+    }
+    // No parameters given: the README's first example that builds.
+    for class in ["polygon", "bicubic"] {
+        let r = conform(&built_in(class));
+        passes(
+            class,
+            &r,
+            &[
+                "pass  params                 none refused",
+                "pass  nested-inside-bvh",
+            ],
+        );
+    }
+    let floor = root().join("scenes/meshes/floor.obj");
+    let r = conform_with(
+        &built_in("mesh"),
+        &[
+            "--params",
+            &format!("file = {:?}, normals = \"face\"", floor.to_str().unwrap()),
+        ],
+    );
+    passes("mesh", &r, &["pass  nested-inside-bvh", "pass  local-geom"]);
+    // csg: the union of disjoint closed children is the list of them.
+    let r = conform_with(
+        &built_in("csg"),
+        &["--params", "op = \"union\"", "--oracle", "list"],
+    );
+    passes(
+        "csg union",
+        &r,
+        &[
+            "pass  children               exactly 2",
+            "pass  nearest-hit            2400 rays agree with `list`",
+            "pass  bvh-nested-inside",
+        ],
+    );
+    // Intersection and difference have no oracle: consistency only, the
+    // oracle checks reported as skipped.
+    for op in ["intersection", "difference"] {
+        let r = conform_with(&built_in("csg"), &["--params", &format!("op = \"{op}\"")]);
+        passes(
+            op,
+            &r,
+            &[
+                "skip  nearest-hit            (no oracle",
+                "pass  interval-respected",
+            ],
+        );
+    }
+    // motion at one pose is the transform of it, and the other way round
+    // (scale 2 and a translation: both round them alike).
+    let keys = "keyframes = [{ time = 0.0, translate = [0.5, -0.25, 1.0], scale = 2.0 }]";
+    let steps = "steps = [{ scale = 2.0 }, { translate = [0.5, -0.25, 1.0] }]";
+    let r = conform_with(
+        &built_in("motion"),
+        &[
+            "--params",
+            keys,
+            "--oracle",
+            "transform",
+            "--oracle-params",
+            steps,
+        ],
+    );
+    passes(
+        "motion",
+        &r,
+        &[
+            "pass  children               exactly 1",
+            "pass  nearest-hit            2400 rays agree with `transform`",
+        ],
+    );
+    let r = conform_with(
+        &built_in("transform"),
+        &[
+            "--params",
+            steps,
+            "--oracle",
+            "motion",
+            "--oracle-params",
+            keys,
+        ],
+    );
+    passes(
+        "transform",
+        &r,
+        &["pass  nearest-hit            2400 rays agree with `motion`"],
+    );
+    // Moving: no oracle, consistency over random times.
+    let r = conform_with(
+        &built_in("motion"),
+        &["--params", "keyframes = [{ time = 0.0 }, { time = 1.0, translate = [1.0, 0.5, 0.0], rotate = { axis = [0.0, 1.0, 0.0], angle = 90.0 } }]"],
+    );
+    passes(
+        "moving motion",
+        &r,
+        &["skip  nearest-hit", "pass  bounds-contain-hits"],
+    );
+}
+
+#[test]
+fn conform_passes_every_built_in_camera_light_and_integrator() {
+    for (class, extra, lines) in [
+        (
+            "pinhole",
+            &[][..],
+            &["pass  not-mirrored", "pass  pixel-centres"][..],
+        ),
+        (
+            "thinlens",
+            &["--params", "aperture_radius = 0.2, focus_distance = 3.0"][..],
+            &["pass  not-mirrored", "pass  time-in-shutter"][..],
+        ),
+        (
+            "point",
+            &[],
+            &[
+                "pass  delta-light",
+                "pass  points-on-light",
+                "skip  pdf-integrates",
+            ],
+        ),
+        (
+            "directional",
+            &[],
+            &["pass  delta-light", "pass  points-on-light"],
+        ),
+        (
+            "constant",
+            &[],
+            &[
+                "pass  pdf-integrates",
+                "pass  li-matches-le",
+                "skip  delta-light",
+            ],
+        ),
+        (
+            "path",
+            &[],
+            &[
+                "pass  furnace",
+                "pass  black-without-light",
+                "pass  deterministic",
+            ],
+        ),
+        (
+            "whitted",
+            &[],
+            &["pass  furnace", "pass  black-without-light"],
+        ),
+        (
+            "distributed",
+            &[],
+            &["pass  furnace", "pass  concurrent-queries"],
+        ),
+        // Not a radiance estimator: the two energy checks do not apply.
+        (
+            "normals",
+            &["--skip", "furnace", "--skip", "black-without-light"],
+            &["skip  furnace                (--skip)", "pass  finite"],
+        ),
+    ] {
+        let r = conform_with(&built_in(class), extra);
+        passes(class, &r, lines);
+    }
+}
+
+/// The fixtures' defects, each failing its check by name: a light whose
+/// `pdf_li` is twice its sampling density, a mirrored camera, an
+/// integrator that counts direct light twice (and `normals` run as a
+/// radiance estimator).
+#[test]
+fn conform_names_the_check_each_broken_kind_fails() {
+    for (lib, params, fails, passes_) in [
+        (
+            fixture("panickylight"),
+            "defect = \"pdf\"",
+            &["pdf-matches-sample", "pdf-integrates"][..],
+            "li-matches-le",
+        ),
+        (
+            fixture("panickycamera"),
+            "defect = \"mirrored\"",
+            &["not-mirrored"][..],
+            "pixel-centres",
+        ),
+        (
+            fixture("panickyintegrator"),
+            "defect = \"double\"",
+            &["furnace"][..],
+            "black-without-light",
+        ),
+        (
+            built_in("normals"),
+            "",
+            &["furnace", "black-without-light"][..],
+            "deterministic",
+        ),
+    ] {
+        let extra: &[&str] = if params.is_empty() {
+            &[]
+        } else {
+            &["--params", params]
+        };
+        let r = conform_with(&lib, extra);
+        assert!(!r.ok, "{}: {}", lib.display(), r.stdout);
+        for f in fails {
+            assert!(
+                r.stdout.contains(&format!("FAIL  {f}")),
+                "{f}:\n{}",
+                r.stdout
+            );
+        }
+        assert!(
+            r.stdout.contains(&format!("pass  {passes_}")),
+            "{}",
+            r.stdout
+        );
+        assert!(r.stderr.contains("fails"), "{}", r.stderr);
+    }
+    // The same fixtures without the defect pass.
+    for f in [
+        "panickylight",
+        "panickycamera",
+        "panickyintegrator",
+        "panickyshader",
+    ] {
+        let r = conform(&fixture(f));
+        passes(f, &r, &["pass  unknown-key-refused"]);
+    }
+}
+
+/// `panics-reported`: with `--panic-param panic_in`, each entry of each
+/// kind panics in turn and is reported naming the plugin and the entry.
+#[test]
+fn conform_panics_reported_for_every_kind() {
+    for (f, entries) in [
+        (
+            "panicky",
+            "create, add_child, prepare, bounds, intersect, occluded, local_geom",
+        ),
+        ("panickyshader", "create, lobes, eval, sample, pdf, emitted"),
+        ("panickylight", "create, sample_li, le, pdf_li"),
+        ("panickycamera", "create, generate_ray"),
+        ("panickyintegrator", "create, li"),
+    ] {
+        let r = conform_with(&fixture(f), &["--panic-param", "panic_in"]);
+        passes(
+            f,
+            &r,
+            &[&format!(
+                "pass  panics-reported        caught and reported with the plugin's name: {entries}"
+            )],
+        );
+        assert!(!r.stdout.contains("not provoked"), "{}", r.stdout);
+    }
+    // A parameter that makes no entry panic fails the check.
+    let r = conform_with(&built_in("sphere"), &["--panic-param", "radius"]);
+    assert!(!r.ok, "{}", r.stdout);
+    assert!(r.stdout.contains("FAIL  panics-reported"), "{}", r.stdout);
+}
+
+/// A plugin that panics during the suite: the check under way fails with
+/// the plugin's name and the entry, conform exits 1 (no crash, no abort).
+#[test]
+fn conform_reports_a_panic_in_each_entry_with_the_plugin_name() {
+    for entry in [
+        "create",
+        "add_child",
+        "prepare",
+        "bounds",
+        "intersect",
+        "occluded",
+        "local_geom",
+    ] {
+        // add_child: conform finds no child count the plugin accepts.
+        let extra = [
+            "--params",
+            &format!("panic_in = \"{entry}\""),
+            "--children",
+            if entry == "add_child" { "1" } else { "0" },
+        ];
+        let out = conform_output(&fixture("panicky"), &extra);
+        assert_eq!(out.status.code(), Some(1), "{entry}: {out:?}");
+        let r = Run::from(out);
+        let fail = r
+            .stdout
+            .lines()
+            .find(|l| l.starts_with("FAIL"))
+            .unwrap_or_else(|| panic!("{entry}: no FAIL line:\n{}", r.stdout));
+        assert!(fail.contains("`panicky`"), "{entry}: {fail}");
+        assert!(
+            fail.contains(&format!("panicked in {entry}: deliberate panic in {entry}")),
+            "{fail}"
+        );
+        assert!(r.stderr.contains("`panicky` fails"), "{}", r.stderr);
+    }
+    for (f, entry) in [
+        ("panickyshader", "sample"),
+        ("panickylight", "sample_li"),
+        ("panickycamera", "generate_ray"),
+        ("panickyintegrator", "li"),
+    ] {
+        let out = conform_output(
+            &fixture(f),
+            &["--params", &format!("panic_in = \"{entry}\"")],
+        );
+        assert_eq!(out.status.code(), Some(1), "{f}: {out:?}");
+        let r = Run::from(out);
+        assert!(
+            r.stdout
+                .contains(&format!("plugin `{f}` panicked in {entry}")),
+            "{f}: {}",
+            r.stdout
+        );
+    }
+}
+
+#[test]
+fn conform_refuses_bad_arguments() {
+    let sphere = built_in("sphere");
+    for (args, says) in [
+        (&["--params", "class = \"x\""][..], "not a parameter"),
+        (&["--params", "radius = "][..], "not a TOML table"),
+        (&["--skip", "no-such-check"][..], "no check of that name"),
+        (&["--oracle", "list"][..], "--oracle"),
+    ] {
+        let r = conform_with(&sphere, args);
+        assert!(!r.ok && r.stderr.contains(says), "{args:?}: {}", r.stderr);
+    }
+    // A plugin that needs parameters, without them: the refusal, and what to do.
+    let r = conform(&built_in("mesh"));
+    assert!(!r.ok, "{}", r.stdout);
+    assert!(
+        r.stdout.contains("FAIL  children") && r.stdout.contains("give --params"),
+        "{}",
+        r.stdout
+    );
+    // @FILE: parameters from a file, its relative paths from its folder.
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        root().join("scenes/meshes/floor.obj"),
+        tmp.path().join("floor.obj"),
+    )
+    .unwrap();
+    std::fs::write(tmp.path().join("p.toml"), "file = \"floor.obj\"\n").unwrap();
+    let at = format!("@{}", tmp.path().join("p.toml").display());
+    let r = conform_with(&built_in("mesh"), &["--params", &at, "--json"]);
+    assert!(r.ok, "{}\n{}", r.stdout, r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).expect("json");
+    assert_eq!(v["failed"], 0, "{}", r.stdout);
+    assert!(
+        v["params"].as_str().unwrap().contains("floor.obj"),
+        "{}",
+        r.stdout
+    );
 }

@@ -33,6 +33,22 @@ fn panic_in_create() {
     says(&r, "objects.x");
 }
 
+/// A panic in `add_child` (the object given a child to hold).
+#[test]
+fn panic_in_add_child() {
+    let folder = plugin_folder(fixtures_dir(), &["panicky"]);
+    let scene = "[render]\nwidth = 8\nheight = 8\nroot = \"x\"\nintegrator = \"normals\"\n[cameras.c]\nclass = \"pinhole\"\n\
+                 [objects.s]\nclass = \"sphere\"\n\
+                 [objects.x]\nclass = \"panicky\"\npanic_in = \"add_child\"\nchildren = [\"s\"]\n";
+    let (r, img) = render_scene(scene, &["--plugin-path", folder.path().to_str().unwrap()]);
+    assert!(!r.ok && img.is_none());
+    says(
+        &r,
+        "plugin `panicky` panicked in add_child: deliberate panic in add_child",
+    );
+    says(&r, "objects.x");
+}
+
 #[test]
 fn panic_in_prepare() {
     says(

@@ -409,6 +409,7 @@ fn a1(b: &mut Bench) -> Result<Vec<Line>> {
         ("octree", class("octree", "max_leaf = 2\n"), ""),
         ("kdtree", class("kdtree", "max_leaf = 1\n"), ""),
         ("slabs", class("slabs", "max_leaf = 1\n"), ""),
+        ("raycls", class("raycls", "max_candidates = 2\n"), ""),
     ];
     let subjects = subjects(b, &list, &children, |_| defs.clone())?;
     let coord = |rng: &mut RngState| match rng.next_u32() % 9 {
@@ -506,6 +507,7 @@ fn a2(b: &mut Bench) -> Result<Vec<Line>> {
             ("octree", class("octree", ""), ""),
             ("kdtree", class("kdtree", ""), ""),
             ("slabs", class("slabs", ""), ""),
+            ("raycls", class("raycls", ""), ""),
         ];
         let subjects = subjects(b, &list, &children, |_| defs.clone())?;
         let mut rays = Vec::with_capacity(n);
@@ -656,6 +658,11 @@ fn a3(b: &mut Bench) -> Result<Vec<Line>> {
         ("kdtree(octree)", class("kdtree", ""), "octree"),
         ("slabs(bvh)", class("slabs", ""), "bvh"),
         ("bvh(slabs)", class("bvh", ""), "slabs"),
+        // Nearly every A3 ray is its own: split cells on their first
+        // visit (by default a cell waits for a second ray), so that the
+        // prim-test ratio measures raycls's culling.
+        ("raycls(bvh)", class("raycls", "min_visits = 1\n"), "bvh"),
+        ("bvh(raycls)", class("bvh", ""), "raycls"),
     ];
     let subjects = subjects(b, &list, &children, defs)?;
     let mut rays = Vec::with_capacity(n);
@@ -847,6 +854,7 @@ fn a4(b: &mut Bench) -> Result<Vec<Line>> {
         ("kdtree", class("kdtree", ""), ""),
         ("bvh", class("bvh", ""), ""),
         ("slabs", class("slabs", ""), ""),
+        ("raycls", class("raycls", ""), ""),
     ];
     let subjects = subjects(b, &list, &children, |_| defs.clone())?;
     let small = |rng: &mut RngState| (rng.next_u32() % 7) as f32 - 3.0;
@@ -1040,6 +1048,11 @@ fn a5(b: &mut Bench) -> Result<Vec<Line>> {
         ("bvh(bvh)", class("bvh", "max_leaf = 1\n"), "bvh"),
         ("grid 32^3(kdtree)", grid, "kdtree"),
         ("slabs(bvh)", class("slabs", "max_leaf = 1\n"), "bvh"),
+        (
+            "raycls(bvh)",
+            class("raycls", "max_candidates = 2\n"),
+            "bvh",
+        ),
     ];
     let subjects = subjects(b, &list, &children, defs)?;
     let o = Vec3::new(-10.0, 50.0, 50.0);

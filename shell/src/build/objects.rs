@@ -378,15 +378,19 @@ fn child_refused(od: &ObjDef, inst: &Instance, e: CallError) -> SceneError {
         &origin,
         od.def.path(),
         "children",
-        format!(
-            "plugin `{}` refused child `{}`: {}",
-            od.def.class,
-            inst.object,
-            if e.panicked {
-                e.to_string()
-            } else {
+        if e.panicked {
+            // As other entries' panics read: the plugin, then the entry.
+            format!(
+                "plugin `{}` {e} (adding child `{}`)",
+                od.def.class, inst.object
+            )
+        } else {
+            format!(
+                "plugin `{}` refused child `{}`: {}",
+                od.def.class,
+                inst.object,
                 crate::plain::plain_message(&e.message)
-            }
-        ),
+            )
+        },
     )
 }

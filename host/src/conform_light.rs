@@ -1,0 +1,333 @@
+//! `rtk conform` for light plugins: the light of a small scene, created
+//! with `--params`, sampled from random points of the box [-4, 4]³ with
+//! random samples and times, as integrators sample it.
+//!
+//! Every light:
+//! - `finite`: each sample's direction is finite and unit, its distance
+//!   positive (infinite allowed), its radiance finite and ≥ 0, its density
+//!   finite and > 0; `le` finite and ≥ 0; some point receives light;
+//! - `deterministic`: the same query gives the same sample, bit for bit;
+//! - `concurrent-queries`: from every thread at once, one thread's answers.
+//!
+//! A light without `le` is a delta light to the host (a point or a single
+//! direction: no ray can find it, and `path` weighs it by next-event
+//! estimation alone):
+//! - `delta-light`: its density is 1, `pdf_li` (if offered) says 0, and
+//!   the sample does not depend on the random numbers;
+//! - `points-on-light`: from every point (at one time) the samples point
+//!   at one position (p + wi · dist), or along one direction when the
+//!   distance is infinite.
+//!
+//! An environment light (`le` offered):
+//! - `at-infinity`: every sample's distance is infinite;
+//! - `li-matches-le`: a sample's radiance is `le` of its direction;
+//! - `pdf-matches-sample`: `pdf_li` of a sampled direction is the density
+//!   the sample reported;
+//! - `pdf-integrates`: ∫ pdf_li dω over the sphere is 1 (uniform-sphere
+//!   Monte Carlo, within 5 standard errors): a density MIS can use.
+
+use crate::conform::{note, scene_using, unknown_key, Check, Cx, Kind, Suite};
+use anyhow::{anyhow, Result};
+use rtk_kernel::abi::{Color, Float3, LightSample, TraceCtx};
+use rtk_kernel::glam::Vec3;
+use rtk_kernel::host::Light;
+use rtk_kernel::sdk::shading::uniform_sphere;
+use rtk_kernel::RngState;
+
+/// One query: the point, the random numbers, the time.
+#[derive(Clone, Copy)]
+struct Query {
+    p: Vec3,
+    u: [f32; 2],
+    time: f32,
+}
+
+fn sample(l: &Light, ctx: &mut TraceCtx, q: &Query) -> Result<Option<LightSample>> {
+    let s = l.sample_li(ctx, &q.p.into(), &q.u, q.time);
+    if let Some((c, m)) = ctx.failure() {
+        return Err(anyhow!("plugin `{c}` {m}"));
+    }
+    Ok(s)
+}
+
+fn bits(s: &Option<LightSample>) -> Option<[u32; 8]> {
+    s.map(|s| {
+        [
+            s.wi.x.to_bits(),
+            s.wi.y.to_bits(),
+            s.wi.z.to_bits(),
+            s.dist.to_bits(),
+            s.li.r.to_bits(),
+            s.li.g.to_bits(),
+            s.li.b.to_bits(),
+            s.pdf.to_bits(),
+        ]
+    })
+}
+
+fn color_ok(c: Color) -> bool {
+    c.is_finite() && c.r >= 0.0 && c.g >= 0.0 && c.b >= 0.0
+}
+
+fn close(a: f32, b: f32) -> bool {
+    (a - b).abs() <= 1e-3 * a.abs().max(b.abs()).max(1e-6)
+}
+
+fn random_point(rng: &mut RngState) -> Vec3 {
+    Vec3::new(
+        rng.next_f32() * 8.0 - 4.0,
+        rng.next_f32() * 8.0 - 4.0,
+        rng.next_f32() * 8.0 - 4.0,
+    )
+}
+
+/// The checks for light plugin `cx.class`.
+pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
+    suite.at("create");
+    let scene = scene_using(Kind::Light, &cx.class, &cx.params, 0);
+    let w = cx.bench.scene(&scene)?;
+    let light = w
+        .lights
+        .first()
+        .ok_or_else(|| anyhow!("the scene has no light"))?;
+    let env = light.is_environment();
+    let mut ctx = TraceCtx::new(0, 1, 0);
+    let n = cx.n(4000, 40000);
+    let queries: Vec<Query> = (0..n)
+        .map(|_| Query {
+            p: random_point(&mut cx.rng),
+            u: [cx.rng.next_f32(), cx.rng.next_f32()],
+            time: cx.rng.next_f32(),
+        })
+        .collect();
+
+    suite.at("finite");
+    let mut results = Vec::with_capacity(n);
+    let (mut bad, mut lit) = ((0u64, String::new()), 0u64);
+    let (mut delta, mut inf, mut le_bad, mut pdf_bad) = Default::default();
+    for q in &queries {
+        let s = sample(light, &mut ctx, q)?;
+        if let Some(s) = &s {
+            lit += 1;
+            let wi = s.wi.v();
+            if !(wi.is_finite()
+                && (wi.length() - 1.0).abs() <= 1e-4
+                && s.dist > 0.0
+                && color_ok(s.li)
+                && s.pdf.is_finite()
+                && s.pdf > 0.0)
+            {
+                note(&mut bad, || format!("from {:?}: {s:?}", q.p.to_array()));
+            }
+            let pdf_li = light.pdf_li(&mut ctx, &q.p.into(), &s.wi);
+            if env {
+                if s.dist != f32::INFINITY {
+                    note(&mut inf, || {
+                        format!("from {:?}: distance {}", q.p.to_array(), s.dist)
+                    });
+                }
+                let le = light.le(&mut ctx, &s.wi);
+                if !(close(le.r, s.li.r) && close(le.g, s.li.g) && close(le.b, s.li.b)) {
+                    note(&mut le_bad, || {
+                        format!(
+                            "towards {:?}: sample's li {:?}, le {le:?}",
+                            wi.to_array(),
+                            s.li
+                        )
+                    });
+                }
+                if !close(pdf_li, s.pdf) {
+                    note(&mut pdf_bad, || {
+                        format!(
+                            "towards {:?}: pdf_li {pdf_li}, sample's pdf {}",
+                            wi.to_array(),
+                            s.pdf
+                        )
+                    });
+                }
+            } else {
+                let other = Query {
+                    u: [1.0 - q.u[1], 1.0 - q.u[0]],
+                    ..*q
+                };
+                let s2 = sample(light, &mut ctx, &other)?;
+                if s.pdf != 1.0 || pdf_li != 0.0 || bits(&s2) != bits(&Some(*s)) {
+                    note(&mut delta, || {
+                        format!(
+                            "from {:?}: pdf {}, pdf_li {pdf_li}, another u gives {}",
+                            q.p.to_array(),
+                            s.pdf,
+                            if bits(&s2) == bits(&Some(*s)) {
+                                "the same sample"
+                            } else {
+                                "another sample"
+                            }
+                        )
+                    });
+                }
+            }
+        }
+        if env {
+            let d: Float3 = uniform_sphere(q.u).into();
+            let le = light.le(&mut ctx, &d);
+            if !color_ok(le) {
+                note(&mut bad, || {
+                    format!("le towards {:?} = {le:?}", d.to_array())
+                });
+            }
+        }
+        results.push(s);
+    }
+    if let Some((c, m)) = ctx.failure() {
+        return Err(anyhow!("plugin `{c}` {m}"));
+    }
+    let nq = n as u64;
+    if lit == 0 {
+        suite.push(Check::new(
+            "finite",
+            false,
+            format!("no sample from {n} points: the light lights nothing"),
+        ));
+    } else {
+        suite.push(Check::held("finite", &bad, nq, "queries"));
+    }
+    if env {
+        suite.push(Check::held("at-infinity", &inf, lit, "samples"));
+        suite.push(Check::held("li-matches-le", &le_bad, lit, "samples"));
+        suite.push(Check::held("pdf-matches-sample", &pdf_bad, lit, "samples"));
+        suite.at("pdf-integrates");
+        // ∫ pdf_li dω by uniform directions: 4π·E[pdf], at a few points.
+        let m = cx.n(20000, 200000);
+        let mut worst = None;
+        for k in 0..4 {
+            let p: Float3 = random_point(&mut cx.rng).into();
+            let (mut s1, mut s2) = (0.0f64, 0.0f64);
+            for _ in 0..m {
+                let d: Float3 = uniform_sphere([cx.rng.next_f32(), cx.rng.next_f32()]).into();
+                let v = light.pdf_li(&mut ctx, &p, &d) as f64 * 4.0 * std::f64::consts::PI;
+                s1 += v;
+                s2 += v * v;
+            }
+            let mean = s1 / m as f64;
+            let se = ((s2 / m as f64 - mean * mean).max(0.0) / m as f64).sqrt();
+            if (mean - 1.0).abs() > 5.0 * se + 0.02 && worst.is_none() {
+                worst = Some(format!(
+                    "from {:?} (point {k}), ∫ pdf_li dω = {mean:.4} ± {se:.4}, not 1",
+                    p.to_array()
+                ));
+            }
+        }
+        suite.push(match worst {
+            None => Check::pass("pdf-integrates", "∫ pdf_li dω = 1 from every point tried"),
+            Some(w) => Check::new("pdf-integrates", false, w),
+        });
+        let why = "an environment light, not a delta light";
+        suite.push(Check::skip("delta-light", why));
+        suite.push(Check::skip("points-on-light", why));
+    } else {
+        suite.push(Check::held("delta-light", &delta, lit, "samples"));
+        suite.at("points-on-light");
+        let mut at = None::<(Vec3, bool)>;
+        let mut off = (0u64, String::new());
+        let mut count = 0;
+        for q in queries.iter().take(n.min(1000)) {
+            let q = Query { time: 0.5, ..*q };
+            let Some(s) = sample(light, &mut ctx, &q)? else {
+                continue;
+            };
+            count += 1;
+            let (here, far) = if s.dist.is_finite() {
+                (q.p + s.wi.v() * s.dist, false)
+            } else {
+                (s.wi.v(), true)
+            };
+            match at {
+                None => at = Some((here, far)),
+                Some((first, first_far)) => {
+                    let tol = 1e-4 * (1.0 + q.p.length() + if far { 0.0 } else { s.dist });
+                    if far != first_far || (here - first).abs().max_element() > tol {
+                        note(&mut off, || {
+                            format!(
+                                "from {:?}: {} {:?}, from the first point {:?}",
+                                q.p.to_array(),
+                                if far { "direction" } else { "position" },
+                                here.to_array(),
+                                first.to_array()
+                            )
+                        });
+                    }
+                }
+            }
+        }
+        suite.push(match (&at, off.0) {
+            (Some((p, far)), 0) => Check::pass(
+                "points-on-light",
+                format!(
+                    "{count} samples at time 0.5: all {} {:?}",
+                    if *far {
+                        "along the direction"
+                    } else {
+                        "at the position"
+                    },
+                    p.to_array()
+                ),
+            ),
+            _ => Check::held("points-on-light", &off, count, "samples"),
+        });
+        let why = "a delta light (no `le`): rays cannot find it";
+        for c in [
+            "at-infinity",
+            "li-matches-le",
+            "pdf-matches-sample",
+            "pdf-integrates",
+        ] {
+            suite.push(Check::skip(c, why));
+        }
+    }
+
+    suite.at("deterministic");
+    let mut again = (0u64, String::new());
+    for (q, s) in queries.iter().zip(&results).rev() {
+        let s2 = sample(light, &mut ctx, q)?;
+        if bits(s) != bits(&s2) {
+            note(&mut again, || {
+                format!("from {:?}: {s:?} then {s2:?}", q.p.to_array())
+            });
+        }
+    }
+    suite.push(Check::held("deterministic", &again, nq, "queries"));
+
+    suite.at("concurrent-queries");
+    let threads = cx.threads;
+    let differ = std::sync::atomic::AtomicU64::new(0);
+    std::thread::scope(|sc| {
+        for ti in 0..threads {
+            let (queries, results, differ) = (&queries, &results, &differ);
+            sc.spawn(move || {
+                let mut ctx = TraceCtx::new(ti as u32, threads as u32, 0);
+                for _ in 0..2 {
+                    for (q, s) in queries.iter().zip(results) {
+                        let s2 = light.sample_li(&mut ctx, &q.p.into(), &q.u, q.time);
+                        if bits(s) != bits(&s2) || ctx.failed() {
+                            differ.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        }
+                    }
+                }
+            });
+        }
+    });
+    let of = nq * 2 * threads as u64;
+    let differ = differ.into_inner();
+    suite.push(Check::new(
+        "concurrent-queries",
+        differ == 0,
+        format!("{threads} threads: {differ} of {of} samples differ from one thread's"),
+    ));
+    drop(w);
+
+    suite.at("unknown-key-refused");
+    let c = unknown_key(cx, 0);
+    suite.push(c);
+    crate::conform_panics::run(cx, suite, 0)?;
+    Ok(())
+}
