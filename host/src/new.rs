@@ -90,6 +90,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "conductor",
     "cone",
     "constant",
+    "csg",
     "cylinder",
     "dielectric",
     "directional",
@@ -102,6 +103,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "lambert",
     "list",
     "mesh",
+    "motion",
     "normals",
     "octree",
     "path",
@@ -111,6 +113,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "polygon",
     "raycls",
     "roughconductor",
+    "slabs",
     "sphere",
     "thinlens",
     "torus",
@@ -218,4 +221,20 @@ pub fn run(a: NewArgs) -> Result<()> {
         dir.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// The list names every folder of `plugins/`, in order (a new plugin
+    /// added without it would let `rtk new` shadow it).
+    #[test]
+    fn builtin_classes_are_the_plugin_folders() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../plugins");
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, super::BUILTIN_CLASSES);
+    }
 }
