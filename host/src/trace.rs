@@ -105,6 +105,7 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     let Some((hits, stats)) = result else {
         unreachable!("at least one pass runs")
     };
+    let passes = times.clone();
     times.sort_by(f64::total_cmp);
     let secs = times[times.len() / 2];
     if let Some(p) = &a.out {
@@ -119,6 +120,7 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
         rays_hash: format!("{:016x}", rays::rays_hash(&rays)),
         threads: pool.current_num_threads(),
         seconds: secs,
+        passes,
         build_seconds: build,
         load_seconds: load,
         aggregate: root_class,
@@ -348,6 +350,9 @@ struct Report<'a> {
     rays_hash: String,
     threads: usize,
     seconds: f64,
+    /// Every pass's time, in the order run (a structure built while
+    /// tracing, `raycls`, is slower in the first).
+    passes: Vec<f64>,
     build_seconds: f64,
     load_seconds: f64,
     aggregate: &'a str,
@@ -378,6 +383,7 @@ impl Report<'_> {
                 "input": self.input, "set": self.set, "query": self.query,
                 "rays": self.rays, "rays_hash": self.rays_hash, "threads": self.threads,
                 "mrays_per_s": mrays, "trace_seconds": self.seconds,
+                "pass_seconds": self.passes,
                 "aggregate": self.aggregate, "build_seconds": self.build_seconds,
                 "load_seconds": self.load_seconds, "memory_bytes": self.memory_bytes,
                 "hits": n_hits, "sum_t": sum_t, "sum_prim": sum_prim,
