@@ -37,6 +37,10 @@ struct Bicubic {
     /// Each patch's box, rounded outwards to f32.
     boxes: Vec<Bounds3>,
     bounds: Bounds3,
+    /// Sphere and slabs of every control point (`inq_bounds`): a Bézier
+    /// patch lies in the convex hull of its control points.
+    sphere: BoundSphere,
+    slabs: SlabBounds,
 }
 
 /// The f32 box around an f64 box, rounded outwards.
@@ -108,6 +112,8 @@ impl Plugin for Bicubic {
                     patches: vec![],
                     boxes: vec![],
                     bounds: Bounds3::EMPTY,
+                    sphere: BoundSphere::EMPTY,
+                    slabs: SlabBounds::EMPTY,
                 })
             }
             (None, Some(list)) => {
@@ -129,6 +135,7 @@ impl Plugin for Bicubic {
                     pts.push(cp);
                 }
                 let (patches, boxes, bounds) = build(&pts, g);
+                let (sphere, slabs) = volumes(&patches);
                 Ok(Bicubic {
                     file: None,
                     origin: env.origin,
@@ -136,6 +143,8 @@ impl Plugin for Bicubic {
                     patches,
                     boxes,
                     bounds,
+                    sphere,
+                    slabs,
                 })
             }
         }
@@ -236,6 +245,7 @@ impl Object for Bicubic {
         self.patches = patches;
         self.boxes = boxes;
         self.bounds = bounds;
+        (self.sphere, self.slabs) = volumes(&self.patches);
         Ok(())
     }
 
@@ -327,9 +337,29 @@ impl PrimitiveSet for Bicubic {
     }
 }
 
+/// Sphere and slabs of every control point, formed in f64 and rounded
+/// outward (the f64 control points are not f32 hull points).
+fn volumes(patches: &[Patch]) -> (BoundSphere, SlabBounds) {
+    let cps: Vec<V3> = patches.iter().flat_map(|p| p.cp).collect();
+    (
+        BoundSphere::around_points_f64(&cps, 0.0),
+        SlabBounds::from_points_f64(&cps, 0.0),
+    )
+}
+
+/// A Bézier patch lies in the convex hull of its control points.
+impl BoundingVolumes for Bicubic {
+    fn bound_sphere(&self, _t0: f32, _t1: f32) -> Option<BoundSphere> {
+        Some(self.sphere)
+    }
+    fn slabs(&self, _t0: f32, _t1: f32) -> Option<SlabBounds> {
+        Some(self.slabs)
+    }
+}
+
 rtk_kernel::export_object!(
     Bicubic,
     class = "bicubic",
     doc = include_str!("../README.md"),
-    capabilities = [PrimitiveSet]
+    capabilities = [PrimitiveSet, BoundingVolumes]
 );

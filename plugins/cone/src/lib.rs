@@ -35,6 +35,8 @@ fn down() -> [f32; 3] {
 }
 
 struct ConeObject {
+    /// Bounding sphere (`inq_bounds`): around the apex and the base rim.
+    sphere: BoundSphere,
     cone: Cone<f32>,
     bounds: Bounds3,
 }
@@ -79,7 +81,12 @@ impl Plugin for ConeObject {
             std::array::from_fn(|i| a64[i].min(base[i] - e[i])),
             std::array::from_fn(|i| a64[i].max(base[i] + e[i])),
         );
+        // The apex and the rim are at most sqrt((h/2)² + r²) from the
+        // axis's midpoint (when r >= h/2 the rim is farther; else the apex).
+        let mid: [f64; 3] = std::array::from_fn(|i| a64[i] + 0.5 * axis[i]);
+        let reach = ((r as f64).powi(2) + (0.5 * h).powi(2)).sqrt();
         Ok(ConeObject {
+            sphere: BoundSphere::from_f64(mid, reach, 1e-6 * reach),
             cone: Cone::new(a64, axis, r as f64),
             bounds: Bounds3::new(Vec3::from(lo), Vec3::from(hi)),
         })
@@ -165,8 +172,20 @@ impl Object for ConeObject {
     }
 }
 
+/// A sphere around the cone, and slabs cutting its box with the sphere's
+/// tangent planes.
+impl BoundingVolumes for ConeObject {
+    fn bound_sphere(&self, _t0: f32, _t1: f32) -> Option<BoundSphere> {
+        Some(self.sphere)
+    }
+    fn slabs(&self, _t0: f32, _t1: f32) -> Option<SlabBounds> {
+        Some(SlabBounds::from_box(&self.bounds).intersect(&SlabBounds::around_sphere(&self.sphere)))
+    }
+}
+
 rtk_kernel::export_object!(
     ConeObject,
     class = "cone",
-    doc = include_str!("../README.md")
+    doc = include_str!("../README.md"),
+    capabilities = [BoundingVolumes]
 );

@@ -317,6 +317,14 @@ impl Triangles for Fractal {
     }
 }
 
+/// The vertices are exact hull points: the triangles are intersected on
+/// them.
+impl BoundingVolumes for Fractal {
+    fn hull_points(&self, _t0: f32, _t1: f32) -> Option<std::borrow::Cow<'_, [[f32; 3]]>> {
+        Some(std::borrow::Cow::Borrowed(&self.t.positions))
+    }
+}
+
 impl SampleSurface for Fractal {
     fn area(&self) -> f32 {
         self.area_cdf.last().copied().unwrap_or(0.0) as f32
@@ -336,5 +344,5 @@ rtk_kernel::export_object!(
     Fractal,
     class = "fractal",
     doc = include_str!("../README.md"),
-    capabilities = [PrimitiveSet, Triangles, SampleSurface]
+    capabilities = [PrimitiveSet, Triangles, SampleSurface, BoundingVolumes]
 );
