@@ -407,14 +407,14 @@ impl<const W: usize> Bvh<W> {
                     (cur & !LEAF) >> Self::SHIFT,
                     (cur & (W as u32 - 1)) as usize,
                 );
-                let node = &self.nodes[n as usize];
+                let node = self.node(n);
                 let first = node.first[slot] as usize;
                 match leaf(first..first + node.count[slot] as usize) {
                     Some(t) => t_max = t,
                     None => return,
                 }
             } else {
-                let node = &self.nodes[cur as usize];
+                let node = self.node(cur);
                 *node_tests += 1;
                 let (mut mask, mut t_near) = pre.test::<W, AVX>(node, ray.t_min, t_max);
                 if SCREEN {
@@ -444,6 +444,16 @@ impl<const W: usize> Bvh<W> {
                 }
             }
         }
+    }
+
+    /// Node `i` of the traversal, without a bounds check: every index the
+    /// walk follows was written by `collapse` (a node's `first` of an inner
+    /// slot, or a leaf's own node), all below `nodes.len()`.
+    #[inline(always)]
+    fn node(&self, i: u32) -> &Node<W> {
+        debug_assert!((i as usize) < self.nodes.len());
+        // SAFETY: as above; the tree is immutable after the build.
+        unsafe { self.nodes.get_unchecked(i as usize) }
     }
 
     /// Of the children in `mask`, return the nearest and defer the others
