@@ -233,11 +233,24 @@ impl Params {
         let Some(arg) = arg else {
             return Ok(Params::default());
         };
+        // Errors name the file of `@FILE`.
+        let label = match arg.strip_prefix('@') {
+            Some(path) => format!("{flag} @{path}"),
+            None => flag.to_string(),
+        };
         let (text, base) = match arg.strip_prefix('@') {
             Some(path) => {
                 let p = Path::new(path);
-                let text = std::fs::read_to_string(p)
-                    .with_context(|| format!("{flag} @{path}: reading {}", p.display()))?;
+                // A regular file of at most a scene's size: a FIFO would
+                // block and `/dev/zero` fill memory.
+                let bytes = rtk_shell::file::read_regular_file(
+                    p,
+                    rtk_shell::file::MAX_SCENE_BYTES,
+                    "parameter file",
+                )
+                .map_err(|e| anyhow::anyhow!("{label}: {e}"))?;
+                let text = String::from_utf8(bytes)
+                    .map_err(|_| anyhow::anyhow!("{label}: not UTF-8 text"))?;
                 let dir = p.parent().map(Path::to_path_buf).unwrap_or_default();
                 (text, dir)
             }
@@ -257,7 +270,7 @@ impl Params {
                         .err()
                         .map(|e| e.to_string())
                         .unwrap_or_default();
-                    format!("{flag}: not a TOML table (`key = value, ...` or @FILE): {e}")
+                    format!("{label}: not a TOML table (`key = value, ...` or @FILE): {e}")
                 })?,
         };
         for k in ["class", "children"] {

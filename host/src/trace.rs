@@ -62,6 +62,9 @@ const CHUNK: usize = 4096;
 
 /// Run `rtk trace`.
 pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> Result<()> {
+    if a.iters == 0 {
+        bail!("--iters must be at least 1 (the timed passes over the rays)");
+    }
     let rss0 = resident_bytes();
     let t_build = Instant::now();
     let world = load_world(&a, parallel)?;
@@ -96,7 +99,7 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     let next_query: Vec<AtomicU64> = (0..pool.current_num_threads())
         .map(|_| AtomicU64::new(0))
         .collect();
-    for _ in 0..a.iters.max(1) {
+    for _ in 0..a.iters {
         let t = Instant::now();
         let r = trace_all(&world, &rays, a.occluded, pool, &next_query)?;
         times.push(t.elapsed().as_secs_f64());

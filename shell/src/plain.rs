@@ -40,6 +40,11 @@ pub fn plain_message(msg: &str) -> String {
     if let Some(rest) = msg.strip_prefix("duplicate field ") {
         return format!("key {rest} given twice");
     }
+    // serde_json's word for a value of a named-choice key (an enum: `bound`,
+    // `normals`) that is neither a string nor a table.
+    if msg == "expected value" {
+        return "expected a string, one of the accepted names".to_string();
+    }
     if msg == "trailing characters" {
         return "the array has too many elements".to_string();
     }
@@ -164,6 +169,10 @@ mod tests {
                 "expected an array of 3 elements, found 2 elements",
             ),
             ("trailing characters", "the array has too many elements"),
+            (
+                "expected value",
+                "expected a string, one of the accepted names",
+            ),
             (
                 "data did not match any variant of untagged enum Scale",
                 "expected a number or an array [x, y, z]",

@@ -389,6 +389,7 @@ fn number_cases() -> Vec<Case> {
         edit("eye_four_numbers", "eye = [0.0, 0.0, 5.0]", "eye = [0.0, 0.0, 5.0, 1.0]", &["scene.toml:9:7", "key `eye`", "the array has too many elements"]).refuse(&["trailing characters"]),
         edit("transform_step_an_empty_array", "{ object = \"tri\" }", "{ object = \"tri\", transform = [[]] }", &["key `transform[0]`", "expected a table, found 0 elements"]).refuse(&["struct", "Step"]),
         edit("transform_scale_a_string", "{ object = \"tri\" }", "{ object = \"tri\", transform = [{ scale = \"x\" }] }", &["key `transform[0].scale`", "expected a number or an array [x, y, z]"]).refuse(&["untagged", "enum"]),
+        edit("bvh_bound_an_integer", "class = \"list\"\nchildren", "class = \"bvh\"\nbound = 1\nchildren", &["scene.toml:31:9", "objects.world: key `bound`", "expected a string, one of the accepted names"]).refuse(&["expected value"]),
         edit("transform_rotate_a_number", "{ object = \"tri\" }", "{ object = \"tri\", transform = [{ rotate = 5 }] }", &["key `transform[0].rotate`", "expected a table, found the integer 5"]).refuse(&["AxisAngle"]),
     ]
 }
@@ -459,6 +460,14 @@ fn file_cases() -> Vec<Case> {
         c.expect.extend(mesh_key.iter().map(|s| s.to_string()));
         c
     };
+    let bvh = bin_dir()
+        .join(format!(
+            "{}rtk_bvh{}",
+            std::env::consts::DLL_PREFIX,
+            std::env::consts::DLL_SUFFIX
+        ))
+        .to_string_lossy()
+        .into_owned();
     vec![
         scene("scene_is_a_fifo", "", &["pipe.toml: cannot read the scene file: it is a FIFO, not a regular file"]).with(Extra::Fifo("pipe.toml")).scene_arg("{dir}/pipe.toml"),
         scene("scene_is_dev_zero", "", &["/dev/zero: cannot read the scene file: it is a device, not a regular file"]).scene_arg("/dev/zero"),
@@ -493,6 +502,7 @@ fn file_cases() -> Vec<Case> {
         with_key(mesh("obj_no_triangles", "e.obj", b"# nothing\nv 0 0 0\n", &["e.obj: the mesh has no triangles"])),
         scene("trace_rays_from_a_fifo", GOOD, &["rays.bin: cannot read the ray file: it is a FIFO, not a regular file"]).with(Extra::Fifo("rays.bin")).command(&["trace", "{dir}/tri.obj", "--rays", "{dir}/rays.bin"]),
         scene("trace_rays_from_dev_zero", GOOD, &["/dev/zero: cannot read the ray file: it is a device"]).command(&["trace", "{dir}/tri.obj", "--rays", "/dev/zero"]),
+        scene("trace_iters_zero", GOOD, &["--iters must be at least 1"]).command(&["trace", "{dir}/tri.obj", "--rayset", "primary", "--iters", "0"]),
         scene("trace_scene_from_a_fifo", GOOD, &["pipe.toml: cannot read the scene file: it is a FIFO"]).with(Extra::Fifo("pipe.toml")).command(&["trace", "{dir}/pipe.toml", "--rayset", "primary"]),
         scene("trace_mesh_from_a_fifo", GOOD, &["objects.mesh: key `file`", "pipe.ply: cannot read the mesh file: it is a FIFO"]).with(Extra::Fifo("pipe.ply")).command(&["trace", "{dir}/pipe.ply", "--rayset", "primary"]),
         edit("bicubic_file_is_a_fifo", "class = \"mesh\"\nfile = \"tri.obj\"", "class = \"bicubic\"\nfile = \"pipe.bpt\"", &["scene.toml:27:8", "objects.tri: key `file`: plugin `bicubic` refused to build", "pipe.bpt: it is a FIFO, not a regular file"]).with(Extra::Fifo("pipe.bpt")),
@@ -501,6 +511,11 @@ fn file_cases() -> Vec<Case> {
         scene("merge_film_spp_zero", GOOD, &["z.rtkfilm: a damaged film header (image 1x1, 0 spp, rectangle 0,0,1,1)"]).with(Extra::Bytes("z.rtkfilm", film(1, 1, 0, 0.0))).command(&["merge", "{dir}/out.exr", "{dir}/z.rtkfilm"]),
         scene("merge_film_with_a_nan_sum", GOOD, &["nan.rtkfilm: a pixel's sum is not a finite number: damaged"]).with(Extra::Bytes("nan.rtkfilm", film(1, 1, 1, f64::NAN))).command(&["merge", "{dir}/out.exr", "{dir}/nan.rtkfilm"]),
         scene("resume_film_header_of_huge_size", GOOD, &["huge.rtkfilm: a damaged film header (image 4294967295x4294967295"]).with(Extra::Bytes("huge.rtkfilm", film(u32::MAX, u32::MAX, 1, 0.0))).args(&["--resume", "{dir}/huge.rtkfilm"]).refuse(&["panicked"]),
+        scene("conform_params_from_dev_zero", GOOD, &["--params @/dev/zero: cannot read the parameter file: it is a device, not a regular file"]).command(&["conform", &bvh, "--params", "@/dev/zero"]),
+        scene("conform_params_from_a_fifo", GOOD, &["p.toml: cannot read the parameter file: it is a FIFO, not a regular file"]).with(Extra::Fifo("p.toml")).command(&["conform", &bvh, "--params", "@{dir}/p.toml"]),
+        scene("conform_params_file_malformed", GOOD, &["--params @{dir}/p.toml: not a TOML table", "line 1, column 9"]).with(Extra::Bytes("p.toml", b"width = \n".to_vec())).command(&["conform", &bvh, "--params", "@{dir}/p.toml"]),
+        scene("conform_plugin_is_a_fifo", GOOD, &["librtk_pipe.so: not a regular file"]).with(Extra::Fifo("librtk_pipe.so")).command(&["conform", "{dir}/librtk_pipe.so", "--class", "pipe"]),
+        scene("conform_plugin_not_a_library", GOOD, &["p.so: cannot load {dir}/p.so: "]).with(Extra::Bytes("p.so", b"root:x:0:0\n".to_vec())).command(&["conform", "{dir}/p.so", "--class", "p"]).refuse(&["dlopen failed"]),
         with_key(mesh("obj_escape_in_file", "x.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \x1b[2J\n", &["x.obj: line 4: `\\u{1b}[2J` is not a vertex index"])),
     ]
 }

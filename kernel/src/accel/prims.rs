@@ -129,10 +129,14 @@ impl Tri4 {
     /// The lanes the exact test may accept below `t_max`: it rejects a lane
     /// only where the scalar watertight test (same operations, same order,
     /// per lane) decides a miss in f32 — mixed edge-function signs, or `t`
-    /// beyond `t_max` — and keeps every lane with an exactly zero edge
-    /// function (the scalar test decides those in f64). A `t` behind the
-    /// origin is left to the scalar test too: within its error bound of 0
-    /// the exact orientation decides (`Core::Near`).
+    /// beyond `t_max` widened by 1 + γ₄ — and keeps every lane with an
+    /// exactly zero edge function (the scalar test decides those in f64). A
+    /// `t` behind the origin is left to the scalar test too: within its
+    /// error bound of 0 the exact orientation decides (`Core::Near`). One
+    /// case differs: a `t` beyond `t_max` yet within its error bound of 0,
+    /// which the scalar test resolves in f64, is rejected here — it needs a
+    /// `t_max` within the rounding of the ray's origin, which rtk's spawned
+    /// rays never have (their offset keeps `t_min` past it).
     #[inline(always)]
     fn screen(&self, r: &RayShear<f32>, t_max: f32) -> u32 {
         #[cfg(target_arch = "x86_64")]
@@ -183,7 +187,12 @@ impl Tri4 {
                 _mm_add_ps(_mm_mul_ps(e0, pz[0]), _mm_mul_ps(e1, pz[1])),
                 _mm_mul_ps(e2, pz[2]),
             );
-            let lim = _mm_mul_ps(_mm_set1_ps(t_max), det);
+            // The scalar test's widened limit, same operations in the same
+            // order, so a lane is rejected only where it rejects too.
+            let lim = _mm_mul_ps(
+                _mm_mul_ps(_mm_set1_ps(t_max), det),
+                _mm_set1_ps(1.0 + crate::geom::gamma::<f32>(4)),
+            );
             let neg_ok = _mm_and_ps(_mm_cmplt_ps(det, zero), _mm_cmpge_ps(ts, lim));
             let pos_ok = _mm_and_ps(_mm_cmpgt_ps(det, zero), _mm_cmple_ps(ts, lim));
             let in_range = _mm_andnot_ps(mixed, _mm_or_ps(neg_ok, pos_ok));

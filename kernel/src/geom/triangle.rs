@@ -214,8 +214,19 @@ fn core_sheared<R: Real>(
             Core::Miss
         };
     }
-    if det < R::ZERO && !(ts >= t_max * det) || det > R::ZERO && !(ts <= t_max * det) {
-        return Core::Miss;
+    // Widened by more than the rounding of t = ts / det and of t_max · det,
+    // so no hit whose computed t is below t_max is lost here (the callers
+    // test t < t_max exactly): otherwise which of two hits an ulp apart is
+    // nearest would depend on the order they are tested in.
+    // A t within its error of 0 is not decided here either: the f64 t the
+    // caller resolves (`resolve_t`) may still be below t_max.
+    let bound = t_max * det * (R::ONE + gamma::<R>(4));
+    if det < R::ZERO && !(ts >= bound) || det > R::ZERO && !(ts <= bound) {
+        return if ts.abs() <= ts_err() {
+            Core::Near(hit())
+        } else {
+            Core::Miss
+        };
     }
     Core::Hit(hit(), ts_err() * inv.abs())
 }
@@ -382,15 +393,12 @@ pub fn intersect_triangle_sheared(
     match core_sheared(r, p, t_max, true) {
         Core::Miss => None,
         Core::Near(h) => resolve_t(o, d, p, t_min, t_max).map(|t| TriHit { t, b: h.b }),
-        Core::Hit(h, dt) => {
-            if !(h.t > t_min && h.t < t_max && h.t.is_finite()) {
-                None
-            } else if h.t <= dt {
-                resolve_t(o, d, p, t_min, t_max).map(|t| TriHit { t, b: h.b })
-            } else {
-                Some(h)
-            }
+        // A t within its error of 0 is replaced by resolve_t's, which is then
+        // the one tested against [t_min, t_max].
+        Core::Hit(h, dt) if h.t <= dt => {
+            resolve_t(o, d, p, t_min, t_max).map(|t| TriHit { t, b: h.b })
         }
+        Core::Hit(h, _) => (h.t > t_min && h.t < t_max && h.t.is_finite()).then_some(h),
     }
 }
 
@@ -773,5 +781,34 @@ mod tests {
                 assert!((q[i] as f64 - exact).abs() <= e[i] as f64);
             }
         }
+    }
+
+    /// A hit counts when t < t_max, for the t the test reports: with t_max
+    /// one ulp above a hit's t the hit is still found, with the same t, and
+    /// with t_max at that t it is not. (The scaled compare `ts <= t_max·det`
+    /// once rounded the other way and lost such hits: `list` then kept a
+    /// child's hit an ulp farther than a later child's, and `raycls`, which
+    /// tests them in another order, did not — on a bunny at scale 1e6.)
+    #[test]
+    fn hit_found_iff_its_t_is_below_t_max() {
+        let mut s = crate::RngState::seeded(11);
+        let mut hits = 0;
+        for _ in 0..200_000 {
+            let mut r = |k: f64| (s.next_f64() * 2.0 - 1.0) * k;
+            let p: [[f32; 3]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| r(1.0) as f32));
+            let far = 10f64.powf(r(7.0).abs());
+            let o: [f32; 3] = std::array::from_fn(|_| (r(1.0) * far) as f32);
+            let aim: [f64; 3] = std::array::from_fn(|_| r(0.3));
+            let scale = (0.5 + s.next_f64()) / far.max(1.0);
+            let d: [f32; 3] = std::array::from_fn(|i| ((aim[i] - o[i] as f64) * scale) as f32);
+            let Some(h) = intersect_triangle(o, d, p, 0.0, f32::INFINITY) else {
+                continue;
+            };
+            hits += 1;
+            let again = intersect_triangle(o, d, p, 0.0, h.t.next_up());
+            assert_eq!(again.map(|a| a.t), Some(h.t), "{o:?} {d:?} {p:?}");
+            assert!(intersect_triangle(o, d, p, 0.0, h.t).is_none());
+        }
+        assert!(hits > 10_000, "{hits}");
     }
 }

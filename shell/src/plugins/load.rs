@@ -95,12 +95,25 @@ pub enum LoadError {
 /// Load and check one plugin library. `expected_class` is the class the file
 /// name promises, if any.
 pub fn load(path: &Path, expected_class: Option<&str>) -> Result<Plugin, LoadError> {
+    let open_error = |msg: String| LoadError::Open {
+        path: path.to_path_buf(),
+        msg,
+    };
+    // Only a regular file: dlopen of a FIFO blocks until a writer comes.
+    match std::fs::metadata(path) {
+        Err(e) => return Err(open_error(e.to_string())),
+        Ok(m) if !m.is_file() => return Err(open_error("not a regular file".to_string())),
+        Ok(_) => {}
+    }
     // SAFETY: loading a library runs its initialisers; rtk plugins are Rust
     // cdylibs whose initialisers do nothing observable. Nothing else of the
     // plugin runs until its header has been checked.
-    let lib = unsafe { libloading::Library::new(path) }.map_err(|e| LoadError::Open {
-        path: path.to_path_buf(),
-        msg: e.to_string(),
+    let lib = unsafe { libloading::Library::new(path) }.map_err(|e| {
+        // libloading's own message is "dlopen failed"; the reason is its source.
+        open_error(match std::error::Error::source(&e) {
+            Some(s) => s.to_string(),
+            None => e.to_string(),
+        })
     })?;
     let header = read_header(&lib, path)?;
     let kind = check_header(&header, path, expected_class)?;
