@@ -550,6 +550,12 @@ pub(crate) fn brief(e: &str) -> String {
 
 /// Run `rtk conform`.
 pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
+    // Say what is wrong with the path before guessing a class from its name.
+    match std::fs::metadata(&a.plugin) {
+        Err(e) => bail!("{}: {e}", a.plugin.display()),
+        Ok(m) if !m.is_file() => bail!("{}: not a regular file", a.plugin.display()),
+        Ok(_) => {}
+    }
     let class = class_of(&a)?;
     let plugin = rtk_shell::plugins::load(&a.plugin, Some(&class))
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.plugin.display()))?;
