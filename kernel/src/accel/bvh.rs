@@ -68,7 +68,7 @@ impl Default for BuildParams {
 }
 
 /// A node of `W` children, boxes in structure-of-arrays order (128 bytes
-/// at W = 4, 256 at W = 8: two and four cache lines).
+/// at W = 4, 256 at W = 8: two and four cache lines, aligned to them).
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug)]
 struct Node<const W: usize> {
@@ -76,19 +76,26 @@ struct Node<const W: usize> {
     lo: [[f32; W]; 3],
     /// Upper corners.
     hi: [[f32; W]; 3],
-    /// Inner child: node index; leaf: first primitive (in leaf order).
-    first: [u32; W],
-    /// 0 for an inner child, else the leaf's primitive count. An empty slot
-    /// has an empty box and is never entered.
-    count: [u32; W],
+    /// What each slot holds, in the form the traversal stack keeps: an
+    /// inner node's index, [`LEAF`] | an index into [`Bvh::leaf_ranges`], or
+    /// [`EMPTY`] (whose box is empty: never entered).
+    child: [u32; W],
+    /// The slots in front-to-back order for each of the eight octants of
+    /// ray directions (Fuetterling et al. 2017, as tinybvh's BVH8_CPU):
+    /// bits `3q..3q + 3` of `perm[i]` name the slot `i`-th nearest for
+    /// octant `q` (bit `a` of `q` set: the direction is negative on axis
+    /// `a`), ranked by the child box's nearest corner along that octant's
+    /// diagonal. The 8-wide walk orders the children it enters by one
+    /// permutation instead of sorting their distances.
+    perm: [u32; W],
 }
 
 impl<const W: usize> Node<W> {
     const EMPTY: Self = Node {
         lo: [[f32::INFINITY; W]; 3],
         hi: [[f32::NEG_INFINITY; W]; 3],
-        first: [0; W],
-        count: [0; W],
+        child: [EMPTY; W],
+        perm: [0; W],
     };
 }
 
@@ -103,6 +110,10 @@ pub type Bvh8 = Bvh<8>;
 /// [`Bvh::order`].
 pub struct Bvh<const W: usize> {
     nodes: Vec<Node<W>>,
+    /// Each leaf's range of [`Bvh::order`] (`first`, `count`), named by the
+    /// `LEAF | index` of its slot: the node keeps one u32 per slot, so an
+    /// 8-wide node stays four cache lines.
+    leaf_ranges: Vec<[u32; 2]>,
     /// Test nodes with AVX2 (W = 8 on a CPU that has it).
     avx2: bool,
     /// Leaf order: `order[k]` is the primitive stored `k`-th.
@@ -129,8 +140,6 @@ enum Kind2 {
 impl<const W: usize> Bvh<W> {
     /// Children per node.
     pub const WIDTH: usize = W;
-    /// log2(W): a leaf on the traversal stack is `(node << SHIFT) | slot`.
-    const SHIFT: u32 = W.trailing_zeros();
 
     /// Whether this CPU runs the `W`-wide test in SIMD (always for W = 4 on
     /// x86_64; for W = 8, when it has AVX2).
@@ -173,6 +182,7 @@ impl<const W: usize> Bvh<W> {
         let nodes2 = b.nodes;
         let mut out = Bvh {
             nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
+            leaf_ranges: Vec::with_capacity(nodes2.len() / 2 + 1),
             avx2: false,
             order,
             root_leaf: None,
@@ -207,13 +217,8 @@ impl<const W: usize> Bvh<W> {
             let at = place(r.start, r.end - r.start, &mut out);
             self.root_leaf = Some(at..at + (r.end - r.start));
         }
-        for n in 0..self.nodes.len() {
-            for s in 0..W {
-                let (first, count) = (self.nodes[n].first[s], self.nodes[n].count[s]);
-                if count > 0 {
-                    self.nodes[n].first[s] = place(first, count, &mut out);
-                }
-            }
+        for leaf in &mut self.leaf_ranges {
+            leaf[0] = place(leaf[0], leaf[1], &mut out);
         }
         self.order = out;
     }
@@ -224,11 +229,10 @@ impl<const W: usize> Bvh<W> {
             .root_leaf
             .iter()
             .map(|r| r.start as usize..r.end as usize);
-        let inner = self.nodes.iter().flat_map(|n| {
-            (0..W)
-                .filter(|&s| n.count[s] > 0)
-                .map(|s| n.first[s] as usize..(n.first[s] + n.count[s]) as usize)
-        });
+        let inner = self
+            .leaf_ranges
+            .iter()
+            .map(|&[first, count]| first as usize..(first + count) as usize);
         root.chain(inner)
     }
 
@@ -239,7 +243,9 @@ impl<const W: usize> Bvh<W> {
 
     /// Bytes held by the tree (nodes and leaf order).
     pub fn bytes(&self) -> usize {
-        self.nodes.capacity() * std::mem::size_of::<Node<W>>() + self.order.capacity() * 4
+        self.nodes.capacity() * std::mem::size_of::<Node<W>>()
+            + self.leaf_ranges.capacity() * 8
+            + self.order.capacity() * 4
     }
 
     /// Fill `W`-wide node `at` from binary node `n`: open the child with the
@@ -271,29 +277,38 @@ impl<const W: usize> Bvh<W> {
                 node.lo[axis][slot] = bb.min.v()[axis];
                 node.hi[axis][slot] = bb.max.v()[axis];
             }
-            match n2[k as usize].kind {
+            node.child[slot] = match n2[k as usize].kind {
                 Kind2::Leaf(first, count) => {
-                    node.first[slot] = first;
-                    // A leaf of no primitives (never made) would read as inner.
-                    node.count[slot] = count.max(1);
+                    self.leaf_ranges.push([first, count]);
+                    let leaf = self.leaf_ranges.len() - 1;
+                    assert!(leaf < LEAF as usize, "more than 2^31 leaves");
+                    LEAF | leaf as u32
                 }
                 Kind2::Inner(..) => {
                     let child = self.nodes.len();
+                    assert!(child < LEAF as usize, "more than 2^31 nodes");
                     self.nodes.push(Node::EMPTY);
-                    node.first[slot] = child as u32;
                     self.collapse(n2, k, child);
+                    child as u32
                 }
-            }
+            };
         }
+        node.perm = octant_order(&node);
         self.nodes[at] = node;
     }
 
-    /// Visit the leaves `ray` may hit over `(t_min, t_max)`, nearest child
+    /// Visit the leaves `ray` may hit over `(t_min, t_max)`, near children
     /// first. `leaf(range)` tests a leaf's primitives (a range of
     /// [`Bvh4::order`], i.e. of a table reordered by it) and returns the
-    /// narrowed `t_max`, or `None` to stop (any-hit queries). Boxes whose
-    /// entry lies beyond the current `t_max` are skipped; an entry equal to it
-    /// is still visited (a tie may be won there).
+    /// narrowed `t_max`, or `None` to stop. Boxes whose entry lies beyond
+    /// the current `t_max` are skipped; an entry equal to it is still
+    /// visited (a tie may be won there).
+    ///
+    /// The order only changes how soon `t_max` narrows, never which
+    /// primitives can win: the 4-wide and portable walks sort the entered
+    /// children by entry distance; the 8-wide AVX2 walk ranks them by the
+    /// node's precomputed order for the ray's octant (`Node::perm`), which
+    /// costs one permutation instead of a sort.
     #[inline]
     pub fn traverse(
         &self,
@@ -302,12 +317,31 @@ impl<const W: usize> Bvh<W> {
         node_tests: &mut u64,
         leaf: impl FnMut(Range<usize>) -> Option<f32>,
     ) {
-        let screen = |_, t, _| Some(t);
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
-            // SAFETY: `avx2` is set only when the CPU has AVX2.
-            return unsafe { self.walk_avx2::<false>(ray, t_max, node_tests, screen, leaf) };
+            // SAFETY: `avx2` is set only when the CPU has AVX2 (and W = 8).
+            return unsafe { self.walk8_avx2::<true>(ray, t_max, node_tests, leaf) };
         }
+        let screen = |_, t, _| Some(t);
+        self.walk::<false, false>(ray, t_max, node_tests, screen, leaf)
+    }
+
+    /// [`traverse`](Self::traverse) for any-hit queries, which stop at the
+    /// first hit: the children are visited in slot order, with no ranking.
+    #[inline]
+    pub fn traverse_any(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        leaf: impl FnMut(Range<usize>) -> Option<f32>,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only when the CPU has AVX2 (and W = 8).
+            return unsafe { self.walk8_avx2::<false>(ray, t_max, node_tests, leaf) };
+        }
+        let screen = |_, t, _| Some(t);
         self.walk::<false, false>(ray, t_max, node_tests, screen, leaf)
     }
 
@@ -330,19 +364,19 @@ impl<const W: usize> Bvh<W> {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only when the CPU has AVX2.
-            return unsafe { self.walk_avx2::<true>(ray, t_max, node_tests, screen, leaf) };
+            return unsafe { self.walk_avx2_screened(ray, t_max, node_tests, screen, leaf) };
         }
         self.walk::<true, false>(ray, t_max, node_tests, screen, leaf)
     }
 
-    /// The walk compiled with AVX2 enabled, so the 8-wide test's intrinsics
-    /// inline into it: the dispatch is one branch per ray, not per node.
+    /// The sorted walk compiled with AVX2 enabled, so the 8-wide test's
+    /// intrinsics inline into it: the dispatch is one branch per ray.
     ///
     /// # Safety
     /// The CPU must have AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn walk_avx2<const SCREEN: bool>(
+    unsafe fn walk_avx2_screened(
         &self,
         ray: &Ray,
         t_max: f32,
@@ -350,7 +384,122 @@ impl<const W: usize> Bvh<W> {
         screen: impl FnMut(usize, f32, f32) -> Option<f32>,
         leaf: impl FnMut(Range<usize>) -> Option<f32>,
     ) {
-        self.walk::<SCREEN, true>(ray, t_max, node_tests, screen, leaf)
+        self.walk::<true, true>(ray, t_max, node_tests, screen, leaf)
+    }
+
+    /// The 8-wide walk, all in AVX2 registers: each node is six aligned
+    /// row loads (the near and far rows chosen once per ray), a subtract
+    /// and a multiply per row, a compare and a mask. The children entered
+    /// are pushed in one pair of 8-wide stores, compressed by a lookup
+    /// table (`COMPRESS`) and, when `ORDERED`, first permuted into the
+    /// octant's front-to-back order, so no branch depends on their
+    /// distances; the nearest comes straight back off the stack.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2; `W` must be 8.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn walk8_avx2<const ORDERED: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        mut leaf: impl FnMut(Range<usize>) -> Option<f32>,
+    ) {
+        use std::arch::x86_64::*;
+        debug_assert!(W == 8);
+        if let Some(r) = &self.root_leaf {
+            leaf(r.start as usize..r.end as usize);
+            return;
+        }
+        if self.nodes.is_empty() {
+            return;
+        }
+        let pre = Precomp::new(ray);
+        // Byte offsets of each axis's near and far row within a node.
+        let row = |upper: bool, a: usize| (if upper { 3 + a } else { a }) * W;
+        let near = [0, 1, 2].map(|a| row(pre.neg[a], a));
+        let far = [0, 1, 2].map(|a| row(!pre.neg[a], a));
+        let octant = pre.neg[0] as u32 | (pre.neg[1] as u32) << 1 | (pre.neg[2] as u32) << 2;
+        let shift = _mm_cvtsi32_si128(3 * octant as i32);
+        let mut ids = std::mem::MaybeUninit::<[u32; STACK8]>::uninit();
+        let mut dists = std::mem::MaybeUninit::<[f32; STACK8]>::uninit();
+        let (ids, dists) = (ids.as_mut_ptr() as *mut u32, dists.as_mut_ptr() as *mut f32);
+        let mut sp = 0usize;
+        let mut t_max = t_max;
+        // SAFETY: register arithmetic, and loads of whole rows of a node
+        // (32 bytes at a 32-byte offset of a 64-byte aligned node) or of the
+        // stack's written entries; every stack store is within `STACK8`.
+        unsafe {
+            let o = pre.o.map(|x| _mm256_set1_ps(x));
+            let inv = pre.inv.map(|x| _mm256_set1_ps(x));
+            let inv_far = pre.inv.map(|x| _mm256_set1_ps(x * FAR_SCALE));
+            let t_lo = _mm256_set1_ps(ray.t_min);
+            let mut cur = 0u32;
+            loop {
+                if cur & LEAF == 0 {
+                    let node = self.node(cur);
+                    *node_tests += 1;
+                    let base = node as *const Node<W> as *const f32;
+                    let mut t0 = t_lo;
+                    let mut t1 = _mm256_set1_ps(t_max);
+                    for a in 0..3 {
+                        let n = _mm256_load_ps(base.add(near[a]));
+                        let f = _mm256_load_ps(base.add(far[a]));
+                        // MAXPS/MINPS return the second operand when either is
+                        // NaN (0·∞): the running bound stays in place.
+                        t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(n, o[a]), inv[a]), t0);
+                        t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(f, o[a]), inv_far[a]), t1);
+                    }
+                    let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1);
+                    let mask = _mm256_movemask_ps(hit) as u32;
+                    if mask != 0 {
+                        let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
+                        if mask & (mask - 1) == 0 {
+                            cur = node.child[mask.trailing_zeros() as usize];
+                            continue;
+                        }
+                        let (mut m, mut t, mut c) = (mask, t0, child);
+                        if ORDERED {
+                            let perm = _mm256_load_si256(node.perm.as_ptr() as *const __m256i);
+                            // VPERMPS reads the low three bits of each index.
+                            let rank = _mm256_srl_epi32(perm, shift);
+                            m = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, rank)) as u32;
+                            t = _mm256_permutevar8x32_ps(t0, rank);
+                            c = _mm256_permutevar8x32_epi32(child, rank);
+                        }
+                        let pick = _mm256_load_si256(COMPRESS[m as usize].as_ptr() as *const __m256i);
+                        assert!(sp + 8 <= STACK8, "BVH traversal stack overflow");
+                        _mm256_storeu_si256(
+                            ids.add(sp) as *mut __m256i,
+                            _mm256_permutevar8x32_epi32(c, pick),
+                        );
+                        _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t, pick));
+                        // Farthest first: the nearest is on top, taken now.
+                        sp += m.count_ones() as usize - 1;
+                        cur = *ids.add(sp);
+                        continue;
+                    }
+                } else {
+                    let r = self.leaf_range(cur);
+                    match leaf(r) {
+                        Some(t) => t_max = t,
+                        None => return,
+                    }
+                }
+                // Next: the nearest deferred child not beyond the best hit.
+                loop {
+                    if sp == 0 {
+                        return;
+                    }
+                    sp -= 1;
+                    if *dists.add(sp) <= t_max {
+                        cur = *ids.add(sp);
+                        break;
+                    }
+                }
+            }
+        }
     }
 
     /// Every child slot of the tree, children before their parents
@@ -361,12 +510,13 @@ impl<const W: usize> Bvh<W> {
         (0..self.nodes.len()).rev().flat_map(move |n| {
             let node = &self.nodes[n];
             (0..W).map(move |k| {
-                let slot = if node.count[k] > 0 {
-                    Slot::Leaf(node.first[k] as usize..(node.first[k] + node.count[k]) as usize)
-                } else if node.lo[0][k] > node.hi[0][k] {
+                let c = node.child[k];
+                let slot = if c == EMPTY {
                     Slot::Empty
+                } else if c & LEAF != 0 {
+                    Slot::Leaf(self.leaf_range(c))
                 } else {
-                    Slot::Node(node.first[k] as usize)
+                    Slot::Node(c as usize)
                 };
                 (n * W + k, slot)
             })
@@ -378,6 +528,8 @@ impl<const W: usize> Bvh<W> {
         self.nodes.len() * W
     }
 
+    /// The walk of the 4-wide tree, of the portable test, and of screened
+    /// queries: children entered are ranked by entry distance.
     #[inline(always)]
     fn walk<const SCREEN: bool, const AVX: bool>(
         &self,
@@ -398,18 +550,11 @@ impl<const W: usize> Bvh<W> {
         let mut t_max = t_max;
         let mut buf = std::mem::MaybeUninit::uninit();
         let mut stack = Stack::on(&mut buf);
-        // The node or leaf being visited: a node index, or a leaf as
-        // (node << SHIFT | slot) with the top bit set.
+        // The node or leaf being visited, as its slot names it.
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                let (n, slot) = (
-                    (cur & !LEAF) >> Self::SHIFT,
-                    (cur & (W as u32 - 1)) as usize,
-                );
-                let node = self.node(n);
-                let first = node.first[slot] as usize;
-                match leaf(first..first + node.count[slot] as usize) {
+                match leaf(self.leaf_range(cur)) {
                     Some(t) => t_max = t,
                     None => return,
                 }
@@ -429,7 +574,7 @@ impl<const W: usize> Bvh<W> {
                     }
                 }
                 if mask != 0 {
-                    cur = self.descend(node, cur, mask, &t_near, &mut stack);
+                    cur = descend(node, mask, &t_near, &mut stack);
                     continue;
                 }
             }
@@ -446,76 +591,144 @@ impl<const W: usize> Bvh<W> {
         }
     }
 
+    /// The range of [`Bvh::order`] of the leaf a slot names (`LEAF | i`).
+    #[inline(always)]
+    fn leaf_range(&self, slot: u32) -> Range<usize> {
+        let [first, count] = self.leaf_ranges[(slot & !LEAF) as usize];
+        first as usize..(first + count) as usize
+    }
+
     /// Node `i` of the traversal, without a bounds check: every index the
-    /// walk follows was written by `collapse` (a node's `first` of an inner
-    /// slot, or a leaf's own node), all below `nodes.len()`.
+    /// walk follows was written by `collapse` (an inner slot's `child`),
+    /// all below `nodes.len()`.
     #[inline(always)]
     fn node(&self, i: u32) -> &Node<W> {
         debug_assert!((i as usize) < self.nodes.len());
         // SAFETY: as above; the tree is immutable after the build.
         unsafe { self.nodes.get_unchecked(i as usize) }
     }
+}
 
-    /// Of the children in `mask`, return the nearest and defer the others
-    /// (farthest pushed first, so they come back nearest first).
-    #[inline(always)]
-    fn descend(
-        &self,
-        node: &Node<W>,
-        at: u32,
-        mask: u32,
-        t_near: &[f32; W],
-        stack: &mut Stack,
-    ) -> u32 {
-        let child = |slot: usize| {
-            if node.count[slot] == 0 {
-                node.first[slot]
-            } else {
-                LEAF | (at << Self::SHIFT) | slot as u32
-            }
+/// Of the children of `node` in `mask`, return the nearest and defer the
+/// others (farthest pushed first, so they come back nearest first).
+#[inline(always)]
+fn descend<const W: usize>(
+    node: &Node<W>,
+    mask: u32,
+    t_near: &[f32; W],
+    stack: &mut Stack,
+) -> u32 {
+    let first = mask.trailing_zeros() as usize;
+    let rest = mask & (mask - 1);
+    if rest == 0 {
+        return node.child[first];
+    }
+    if rest & (rest - 1) == 0 {
+        // Two: the commonest case after one, without a sort.
+        let second = rest.trailing_zeros() as usize;
+        let (near, far) = if t_near[second] < t_near[first] {
+            (second, first)
+        } else {
+            (first, second)
         };
-        let first = mask.trailing_zeros() as usize;
-        let rest = mask & (mask - 1);
-        if rest == 0 {
-            return child(first);
+        stack.push((node.child[far], t_near[far]));
+        return node.child[near];
+    }
+    // More: push them all, order that run of the stack farthest first
+    // (insertion sort of at most W), and take the nearest off the top.
+    let base = stack.len;
+    let mut m = mask;
+    while m != 0 {
+        let slot = m.trailing_zeros() as usize;
+        m &= m - 1;
+        stack.push((node.child[slot], t_near[slot]));
+    }
+    let run = stack.top_run(base);
+    for i in 1..run.len() {
+        let mut j = i;
+        while j > 0 && run[j - 1].1 < run[j].1 {
+            run.swap(j - 1, j);
+            j -= 1;
         }
-        if rest & (rest - 1) == 0 {
-            // Two: the commonest case after one, without a sort.
-            let second = rest.trailing_zeros() as usize;
-            let (near, far) = if t_near[second] < t_near[first] {
-                (second, first)
-            } else {
-                (first, second)
-            };
-            stack.push((child(far), t_near[far]));
-            return child(near);
-        }
-        // More: push them all, order that run of the stack farthest first
-        // (insertion sort of at most W), and take the nearest off the top.
-        let base = stack.len;
-        let mut m = mask;
-        while m != 0 {
-            let slot = m.trailing_zeros() as usize;
-            m &= m - 1;
-            stack.push((child(slot), t_near[slot]));
-        }
-        let run = stack.top_run(base);
-        for i in 1..run.len() {
-            let mut j = i;
-            while j > 0 && run[j - 1].1 < run[j].1 {
-                run.swap(j - 1, j);
-                j -= 1;
-            }
-        }
-        match stack.pop() {
-            Some((c, _)) => c,
-            None => unreachable!("three or more children were pushed"),
-        }
+    }
+    match stack.pop() {
+        Some((c, _)) => c,
+        None => unreachable!("three or more children were pushed"),
     }
 }
 
-/// Marks a leaf on the traversal stack.
+/// Marks a leaf slot (`LEAF | index into leaf_ranges`); a node index has
+/// this bit clear.
 const LEAF: u32 = 1 << 31;
+/// An unused slot (its box is empty, so it is never entered).
+const EMPTY: u32 = u32::MAX;
+
+/// Entries of the 8-wide walk's stack: at most seven deferred per level,
+/// and room for the last 8-wide store.
+const STACK8: usize = 7 * MAX_DEPTH + 8;
+
+/// For each mask of entered children (in rank order), the lanes to gather
+/// so that they come first, highest rank first: stored at the stack's top,
+/// the nearest (lowest rank) ends up on top.
+#[cfg(target_arch = "x86_64")]
+#[repr(C, align(32))]
+struct CompressTable([[u32; 8]; 256]);
+
+#[cfg(target_arch = "x86_64")]
+impl std::ops::Index<usize> for CompressTable {
+    type Output = [u32; 8];
+    fn index(&self, m: usize) -> &[u32; 8] {
+        &self.0[m]
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+static COMPRESS: CompressTable = CompressTable({
+    let mut t = [[0u32; 8]; 256];
+    let mut m = 0;
+    while m < 256 {
+        let (mut k, mut lane) = (0, 8);
+        while lane > 0 {
+            lane -= 1;
+            if m >> lane & 1 == 1 {
+                t[m][k] = lane as u32;
+                k += 1;
+            }
+        }
+        m += 1;
+    }
+    t
+});
+
+/// The slots of `node` in front-to-back order for each octant of
+/// directions ([`Node::perm`]): ranked by the nearest corner of each child
+/// box along the octant's diagonal, empty slots last, ties by slot.
+fn octant_order<const W: usize>(node: &Node<W>) -> [u32; W] {
+    let mut perm = [0u32; W];
+    for q in 0..8 {
+        let key = |s: usize| -> f32 {
+            if node.child[s] == EMPTY {
+                return f32::INFINITY;
+            }
+            (0..3)
+                .map(|a| {
+                    if q >> a & 1 == 1 {
+                        // Negative along `a`: the upper face is met first.
+                        -node.hi[a][s]
+                    } else {
+                        node.lo[a][s]
+                    }
+                })
+                .sum()
+        };
+        let mut slots: [usize; W] = std::array::from_fn(|s| s);
+        slots.sort_by(|&x, &y| key(x).total_cmp(&key(y)).then(x.cmp(&y)));
+        for (i, &s) in slots.iter().enumerate() {
+            perm[i] |= (s as u32) << (3 * q);
+        }
+    }
+    perm
+}
 
 /// The traversal stack over a buffer of [`STACK`] entries the caller keeps
 /// uninitialised (created once per ray; zeroing 1.5 KB would cost more than a
@@ -537,8 +750,8 @@ impl<'a> Stack<'a> {
         }
     }
 
-    /// Push; the depth bound (`MAX_DEPTH`, three siblings a level) makes
-    /// overflow impossible, and the assertion checks it regardless.
+    /// Push; the depth bound (`MAX_DEPTH`, at most W − 1 siblings a level)
+    /// makes overflow impossible, and the assertion checks it regardless.
     #[inline(always)]
     fn push(&mut self, v: (u32, f32)) {
         assert!(self.len < STACK, "BVH traversal stack overflow");

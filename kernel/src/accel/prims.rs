@@ -53,16 +53,20 @@ pub struct Nearest {
     best: u64,
     /// The ray's shear for the triangle test, computed once.
     shear: RayShear<f32>,
+    /// The same, in the form the 4-wide leaf screen reads.
+    screen: ScreenRay,
 }
 
 impl Nearest {
     /// A query over `(ray.t_min, ray.t_max)` with nothing found yet.
     #[inline]
     pub fn new(ray: &Ray) -> Self {
+        let shear = RayShear::new(ray.origin.to_array(), ray.dir.to_array());
         Nearest {
             ray: *ray,
             best: u64::MAX,
-            shear: RayShear::new(ray.origin.to_array(), ray.dir.to_array()),
+            screen: ScreenRay::new(&shear),
+            shear,
         }
     }
 
@@ -93,30 +97,70 @@ pub struct Primitives {
     /// The three vertices of each triangle entry, parallel to `refs`
     /// (zeros for other entries): the leaf's own layout, no index lookup.
     tris: Vec<[[f32; 3]; 3]>,
-    /// Packed leaves' triangles, four to a block ([`Primitives::pack`]).
+    /// The entries four to a block ([`Primitives::pack`]).
     blocks: Vec<Tri4>,
-    /// Per block: it holds triangles only (screened 4-wide).
-    packed: Vec<bool>,
 }
 
-/// Four triangles in structure-of-arrays order: `v[vertex][axis][lane]`.
-#[repr(C, align(16))]
+/// Four entries of the table, a leaf's unit: their triangles in
+/// structure-of-arrays order (`v[vertex][axis][lane]`) and their
+/// [`PrimRef`]s, in three whole cache lines, so a leaf visit reads one
+/// contiguous block and nothing else.
+#[repr(C, align(64))]
 #[derive(Clone, Copy)]
 struct Tri4 {
     v: [[[f32; 4]; 3]; 3],
+    refs: [PrimRef; 4],
+    /// The lanes holding triangles when every entry of the block is a
+    /// triangle or a gap (screened 4-wide); 0 when it holds another kind
+    /// (queried entry by entry).
+    lanes: u32,
+}
+
+/// What the 4-wide screen needs of a ray, computed once per query: the
+/// sheared space's axes as row offsets, and the origin and shear in that
+/// order.
+#[derive(Clone, Copy)]
+pub struct ScreenRay {
+    k: [usize; 3],
+    o: [f32; 3],
+    s: [f32; 3],
+}
+
+impl ScreenRay {
+    fn new(r: &RayShear<f32>) -> Self {
+        let (o, k, s) = r.parts();
+        ScreenRay {
+            k,
+            o: k.map(|a| o[a]),
+            s,
+        }
+    }
 }
 
 impl Tri4 {
-    fn new(tris: impl Iterator<Item = [[f32; 3]; 3]>) -> Self {
+    fn new(entries: &[([[f32; 3]; 3], PrimRef, bool)]) -> Self {
         let mut v = [[[0.0f32; 4]; 3]; 3];
-        for (lane, t) in tris.enumerate() {
+        let mut refs = [GAP; 4];
+        let mut lanes = 0;
+        let mut packed = true;
+        for (lane, &(t, r, is_tri)) in entries.iter().enumerate() {
             for (k, p) in t.iter().enumerate() {
                 for a in 0..3 {
                     v[k][a][lane] = p[a];
                 }
             }
+            refs[lane] = r;
+            if is_tri {
+                lanes |= 1 << lane;
+            } else if r != GAP {
+                packed = false;
+            }
         }
-        Tri4 { v }
+        Tri4 {
+            v,
+            refs,
+            lanes: if packed { lanes } else { 0 },
+        }
     }
 
     /// The triangle in `lane`.
@@ -138,7 +182,7 @@ impl Tri4 {
     /// `t_max` within the rounding of the ray's origin, which rtk's spawned
     /// rays never have (their offset keeps `t_min` past it).
     #[inline(always)]
-    fn screen(&self, r: &RayShear<f32>, t_max: f32) -> u32 {
+    fn screen(&self, r: &ScreenRay, t_max: f32) -> u32 {
         #[cfg(target_arch = "x86_64")]
         {
             // SAFETY: SSE/SSE2 only, part of every x86_64 CPU.
@@ -155,20 +199,24 @@ impl Tri4 {
     /// The CPU must have SSE2 (every x86_64 CPU does).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn screen_sse(&self, r: &RayShear<f32>, t_max: f32) -> u32 {
+    unsafe fn screen_sse(&self, r: &ScreenRay, t_max: f32) -> u32 {
         use std::arch::x86_64::*;
-        let (o, k, s) = r.parts();
-        // SAFETY: the rows are four floats each; the rest is register arithmetic.
+        let (o, k, s) = (r.o, r.k, r.s);
+        debug_assert!(k.iter().all(|&a| a < 3));
+        // SAFETY: `k` holds axes (0..3), so each row read is one of the
+        // block's (four floats, 16-byte aligned); the rest is register
+        // arithmetic.
         unsafe {
-            let load = |row: &[f32; 4]| _mm_loadu_ps(row.as_ptr());
+            let load = |vert: &[[f32; 4]; 3], a: usize| _mm_load_ps(vert.as_ptr().add(a).cast());
             let (sx, sy, sz) = (_mm_set1_ps(s[0]), _mm_set1_ps(s[1]), _mm_set1_ps(s[2]));
+            let (ox, oy, oz) = (_mm_set1_ps(o[0]), _mm_set1_ps(o[1]), _mm_set1_ps(o[2]));
             let mut px = [_mm_setzero_ps(); 3];
             let mut py = [_mm_setzero_ps(); 3];
             let mut pz = [_mm_setzero_ps(); 3];
             for (vi, vert) in self.v.iter().enumerate() {
-                let tx = _mm_sub_ps(load(&vert[k[0]]), _mm_set1_ps(o[k[0]]));
-                let ty = _mm_sub_ps(load(&vert[k[1]]), _mm_set1_ps(o[k[1]]));
-                let tz = _mm_sub_ps(load(&vert[k[2]]), _mm_set1_ps(o[k[2]]));
+                let tx = _mm_sub_ps(load(vert, k[0]), ox);
+                let ty = _mm_sub_ps(load(vert, k[1]), oy);
+                let tz = _mm_sub_ps(load(vert, k[2]), oz);
                 px[vi] = _mm_add_ps(tx, _mm_mul_ps(sx, tz));
                 py[vi] = _mm_add_ps(ty, _mm_mul_ps(sy, tz));
                 pz[vi] = _mm_mul_ps(tz, sz);
@@ -219,7 +267,6 @@ impl Primitives {
             refs: Vec::new(),
             tris: Vec::new(),
             blocks: Vec::new(),
-            packed: Vec::new(),
         };
         let mut boxes = Vec::new();
         for (c, child) in children.iter().enumerate() {
@@ -287,13 +334,9 @@ impl Primitives {
     /// [`PAD`](super::PAD) entries of `order` become gaps that no query
     /// visits.
     pub fn reorder(&mut self, order: &[u32]) {
-        let gap = PrimRef {
-            child: u32::MAX,
-            prim: u32::MAX,
-        };
         self.refs = order
             .iter()
-            .map(|&i| self.refs.get(i as usize).copied().unwrap_or(gap))
+            .map(|&i| self.refs.get(i as usize).copied().unwrap_or(GAP))
             .collect();
         self.tris = order
             .iter()
@@ -345,7 +388,6 @@ impl Primitives {
         self.refs.capacity() * std::mem::size_of::<PrimRef>()
             + self.tris.capacity() * std::mem::size_of::<[[f32; 3]; 3]>()
             + self.blocks.capacity() * std::mem::size_of::<Tri4>()
-            + self.packed.capacity()
             + self.children.capacity() * std::mem::size_of::<Child>()
     }
 
@@ -369,7 +411,7 @@ impl Primitives {
             tests += 1;
             let r = self.refs[i];
             match self.sources[r.child as usize] {
-                Source::Triangles => self.triangle(q, d, i, self.vertices(i), hit, level),
+                Source::Triangles => self.triangle(q, d, r, self.vertices(i), hit, level),
                 Source::Set(_) => {
                     if !run.push(r) {
                         self.flush(ctx, q, &mut run, hit, level);
@@ -402,12 +444,11 @@ impl Primitives {
         &self,
         q: &mut Nearest,
         d: [f32; 3],
-        i: usize,
+        r: PrimRef,
         v: [[f32; 3]; 3],
         hit: &mut Hit,
         level: u32,
     ) {
-        let r = self.refs[i];
         let limit = q.limit(r.key());
         if let Some(h) = intersect_triangle_sheared(&q.shear, d, v, q.ray.t_min, limit) {
             q.ray.t_max = h.t;
@@ -425,34 +466,27 @@ impl Primitives {
     /// 4-wide test. The table must be in a padded leaf order
     /// ([`Bvh4::pad_leaves`](super::Bvh4::pad_leaves) with 4): every leaf
     /// starts a block, so a leaf's first entry names its block. A block is
-    /// screened 4-wide if it holds triangles only; other leaves are queried
+    /// screened 4-wide if it holds triangles only; other blocks are queried
     /// entry by entry. The unpacked copy of the vertices is then dropped:
     /// the blocks hold them.
     pub fn pack(&mut self) {
-        let gap = |r: &PrimRef| r.child == u32::MAX;
-        self.blocks = self
-            .tris
-            .chunks(4)
-            .map(|c| Tri4::new(c.iter().copied()))
-            .collect();
-        self.packed = self
-            .refs
-            .chunks(4)
-            .map(|c| {
-                c.iter().any(|r| !gap(r))
-                    && c.iter().all(|r| {
-                        gap(r) || matches!(self.sources[r.child as usize], Source::Triangles)
-                    })
+        let entries: Vec<_> = (0..self.refs.len())
+            .map(|i| {
+                let r = self.refs[i];
+                let is_tri = r != GAP
+                    && matches!(self.sources[r.child as usize], Source::Triangles);
+                (self.tris[i], r, is_tri)
             })
             .collect();
+        self.blocks = entries.chunks(4).map(Tri4::new).collect();
         self.tris = Vec::new();
     }
 
     /// Nearest hit among the entries of `range` (a leaf of a structure that
-    /// called [`Primitives::pack`]): a packed leaf's triangles are screened
+    /// called [`Primitives::pack`]): a packed block's triangles are screened
     /// four at a time (the same arithmetic per lane as the scalar test, so
     /// no hit is lost), and only the survivors take the exact test.
-    #[inline]
+    #[inline(always)]
     pub fn intersect_range(
         &self,
         ctx: &mut TraceCtx,
@@ -461,32 +495,34 @@ impl Primitives {
         hit: &mut Hit,
         level: u32,
     ) {
-        let b = range.start / 4;
-        if !self.packed.get(b).copied().unwrap_or(false) {
-            return self.intersect_ids(ctx, q, range, hit, level);
-        }
-        ctx.stats.prim_tests += range.len() as u64;
         let d = q.ray.dir.to_array();
-        for (k, first) in range.clone().step_by(4).enumerate() {
-            let lanes = (range.end - first).min(4);
+        let first = range.start / 4;
+        let blocks = &self.blocks[first..range.end.div_ceil(4)];
+        for (k, block) in blocks.iter().enumerate() {
+            let start = (first + k) * 4;
+            let ids = start.max(range.start)..(start + 4).min(range.end);
+            if block.lanes == 0 {
+                self.intersect_ids(ctx, q, ids, hit, level);
+                continue;
+            }
+            ctx.stats.prim_tests += ids.len() as u64;
             // Screen with the loosest limit a tie could need.
             let limit = if q.found() {
                 q.ray.t_max.next_up()
             } else {
                 q.ray.t_max
             };
-            let block = &self.blocks[b + k];
-            let mut mask = block.screen(&q.shear, limit) & ((1 << lanes) - 1);
+            let mut mask = block.screen(&q.screen, limit) & block.lanes;
             while mask != 0 {
                 let lane = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                self.triangle(q, d, first + lane, block.tri(lane), hit, level);
+                self.triangle(q, d, block.refs[lane], block.tri(lane), hit, level);
             }
         }
     }
 
     /// Any hit among the entries of `range` (see [`Primitives::intersect_range`]).
-    #[inline]
+    #[inline(always)]
     pub fn occluded_range(
         &self,
         ctx: &mut TraceCtx,
@@ -494,17 +530,22 @@ impl Primitives {
         range: std::ops::Range<usize>,
         level: u32,
     ) -> bool {
-        let b = range.start / 4;
-        if !self.packed.get(b).copied().unwrap_or(false) {
-            return self.occluded_ids(ctx, ray, range, level);
-        }
-        ctx.stats.prim_tests += range.len() as u64;
         let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
         let shear = RayShear::new(o, d);
-        for (k, first) in range.clone().step_by(4).enumerate() {
-            let lanes = (range.end - first).min(4);
-            let block = &self.blocks[b + k];
-            let mut mask = block.screen(&shear, ray.t_max) & ((1 << lanes) - 1);
+        let screen = ScreenRay::new(&shear);
+        let first = range.start / 4;
+        let blocks = &self.blocks[first..range.end.div_ceil(4)];
+        for (k, block) in blocks.iter().enumerate() {
+            let start = (first + k) * 4;
+            let ids = start.max(range.start)..(start + 4).min(range.end);
+            if block.lanes == 0 {
+                if self.occluded_ids(ctx, ray, ids, level) {
+                    return true;
+                }
+                continue;
+            }
+            ctx.stats.prim_tests += ids.len() as u64;
+            let mut mask = block.screen(&screen, ray.t_max) & block.lanes;
             while mask != 0 {
                 let lane = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
@@ -613,6 +654,12 @@ impl Primitives {
         self.children[c].local_geom(ctx, ray, hit, level + 1, mask, out);
     }
 }
+
+/// The entry of a gap in a padded order.
+const GAP: PrimRef = PrimRef {
+    child: u32::MAX,
+    prim: u32::MAX,
+};
 
 /// Longest run of one primitive set's primitives sent in one call.
 const RUN: usize = 32;

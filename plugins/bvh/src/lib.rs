@@ -180,7 +180,7 @@ fn occluded_in<const W: usize>(
         (!found).then_some(ray.t_max)
     };
     match &b.volumes {
-        Volumes::None => bvh.traverse(ray, ray.t_max, &mut nodes, leaf),
+        Volumes::None => bvh.traverse_any(ray, ray.t_max, &mut nodes, leaf),
         Volumes::Spheres(v) => bvh.traverse_screened(
             ray,
             ray.t_max,
