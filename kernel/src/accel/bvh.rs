@@ -52,17 +52,24 @@ pub struct BuildParams {
     /// Largest leaf the SAH may choose (larger leaves: fewer nodes, more
     /// primitive tests).
     pub max_leaf: usize,
-    /// Cost of a primitive test relative to a node visit, in the SAH.
+    /// Cost of testing one block of primitives relative to a node visit,
+    /// in the SAH.
     pub prim_cost: f32,
+    /// Primitives tested together (the leaf's SIMD width): the SAH counts
+    /// a leaf's cost in whole blocks, as Embree's builders do, since a
+    /// block of one costs what a block of four does. Leaves then fill
+    /// their blocks: fewer leaves, fewer nodes, no padding to read.
+    pub block: usize,
 }
 
 impl Default for BuildParams {
-    /// Leaves of up to 4 primitives, a triangle test costing about one box
-    /// test: what the measurements in BENCHMARKS.md chose.
+    /// Leaves of up to 4 primitives tested one at a time, a test costing
+    /// about one box test.
     fn default() -> Self {
         BuildParams {
             max_leaf: 4,
             prim_cost: 1.0,
+            block: 1,
         }
     }
 }
@@ -77,8 +84,8 @@ struct Node<const W: usize> {
     /// Upper corners.
     hi: [[f32; W]; 3],
     /// What each slot holds, in the form the traversal stack keeps: an
-    /// inner node's index, [`LEAF`] | an index into [`Bvh::leaf_ranges`], or
-    /// [`EMPTY`] (whose box is empty: never entered).
+    /// inner node's index, [`LEAF`] | the leaf's first entry in
+    /// [`Bvh::order`], or [`EMPTY`] (whose box is empty: never entered).
     child: [u32; W],
     /// The slots in front-to-back order for each of the eight octants of
     /// ray directions (Fuetterling et al. 2017, as tinybvh's BVH8_CPU):
@@ -110,10 +117,8 @@ pub type Bvh8 = Bvh<8>;
 /// [`Bvh::order`].
 pub struct Bvh<const W: usize> {
     nodes: Vec<Node<W>>,
-    /// Each leaf's range of [`Bvh::order`] (`first`, `count`), named by the
-    /// `LEAF | index` of its slot: the node keeps one u32 per slot, so an
-    /// 8-wide node stays four cache lines.
-    leaf_ranges: Vec<[u32; 2]>,
+    /// Every leaf: its range of [`Bvh::order`] and the slot naming it.
+    leaves: Vec<LeafInfo>,
     /// Test nodes with AVX2 (W = 8 on a CPU that has it).
     avx2: bool,
     /// Leaf order: `order[k]` is the primitive stored `k`-th.
@@ -182,7 +187,7 @@ impl<const W: usize> Bvh<W> {
         let nodes2 = b.nodes;
         let mut out = Bvh {
             nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
-            leaf_ranges: Vec::with_capacity(nodes2.len() / 2 + 1),
+            leaves: Vec::with_capacity(nodes2.len() / 2 + 1),
             avx2: false,
             order,
             root_leaf: None,
@@ -196,6 +201,7 @@ impl<const W: usize> Bvh<W> {
                 out.collapse(&nodes2, root, 0);
             }
         }
+        out.name_leaves();
         out.set_avx2(true);
         out
     }
@@ -217,10 +223,11 @@ impl<const W: usize> Bvh<W> {
             let at = place(r.start, r.end - r.start, &mut out);
             self.root_leaf = Some(at..at + (r.end - r.start));
         }
-        for leaf in &mut self.leaf_ranges {
-            leaf[0] = place(leaf[0], leaf[1], &mut out);
+        for leaf in &mut self.leaves {
+            leaf.first = place(leaf.first, leaf.count, &mut out);
         }
         self.order = out;
+        self.name_leaves();
     }
 
     /// The leaves: ranges of [`Bvh4::order`].
@@ -230,9 +237,9 @@ impl<const W: usize> Bvh<W> {
             .iter()
             .map(|r| r.start as usize..r.end as usize);
         let inner = self
-            .leaf_ranges
+            .leaves
             .iter()
-            .map(|&[first, count]| first as usize..(first + count) as usize);
+            .map(|l| l.first as usize..(l.first + l.count) as usize);
         root.chain(inner)
     }
 
@@ -244,7 +251,7 @@ impl<const W: usize> Bvh<W> {
     /// Bytes held by the tree (nodes and leaf order).
     pub fn bytes(&self) -> usize {
         self.nodes.capacity() * std::mem::size_of::<Node<W>>()
-            + self.leaf_ranges.capacity() * 8
+            + self.leaves.capacity() * std::mem::size_of::<LeafInfo>()
             + self.order.capacity() * 4
     }
 
@@ -279,10 +286,14 @@ impl<const W: usize> Bvh<W> {
             }
             node.child[slot] = match n2[k as usize].kind {
                 Kind2::Leaf(first, count) => {
-                    self.leaf_ranges.push([first, count]);
-                    let leaf = self.leaf_ranges.len() - 1;
-                    assert!(leaf < LEAF as usize, "more than 2^31 leaves");
-                    LEAF | leaf as u32
+                    self.leaves.push(LeafInfo {
+                        first,
+                        count,
+                        node: at as u32,
+                        slot: slot as u32,
+                    });
+                    // Named once the order is final (`name_leaves`).
+                    EMPTY
                 }
                 Kind2::Inner(..) => {
                     let child = self.nodes.len();
@@ -298,9 +309,12 @@ impl<const W: usize> Bvh<W> {
     }
 
     /// Visit the leaves `ray` may hit over `(t_min, t_max)`, near children
-    /// first. `leaf(range)` tests a leaf's primitives (a range of
-    /// [`Bvh4::order`], i.e. of a table reordered by it) and returns the
-    /// narrowed `t_max`, or `None` to stop. Boxes whose entry lies beyond
+    /// first. `leaf(first)` tests a leaf's primitives and returns the
+    /// narrowed `t_max`, or `None` to stop. A leaf is named by its first
+    /// entry in [`Bvh::order`] (of a table reordered by it); where it ends
+    /// is the table's to know ([`Bvh::leaves`] lists the ranges), so that a
+    /// leaf visit reads the leaf's own data and nothing else — a table of
+    /// ranges was one more cache miss per leaf on incoherent rays. Boxes whose entry lies beyond
     /// the current `t_max` are skipped; an entry equal to it is still
     /// visited (a tie may be won there).
     ///
@@ -315,7 +329,7 @@ impl<const W: usize> Bvh<W> {
         ray: &Ray,
         t_max: f32,
         node_tests: &mut u64,
-        leaf: impl FnMut(Range<usize>) -> Option<f32>,
+        leaf: impl FnMut(usize) -> Option<f32>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
@@ -334,7 +348,7 @@ impl<const W: usize> Bvh<W> {
         ray: &Ray,
         t_max: f32,
         node_tests: &mut u64,
-        leaf: impl FnMut(Range<usize>) -> Option<f32>,
+        leaf: impl FnMut(usize) -> Option<f32>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
@@ -359,7 +373,7 @@ impl<const W: usize> Bvh<W> {
         t_max: f32,
         node_tests: &mut u64,
         screen: impl FnMut(usize, f32, f32) -> Option<f32>,
-        leaf: impl FnMut(Range<usize>) -> Option<f32>,
+        leaf: impl FnMut(usize) -> Option<f32>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
@@ -382,7 +396,7 @@ impl<const W: usize> Bvh<W> {
         t_max: f32,
         node_tests: &mut u64,
         screen: impl FnMut(usize, f32, f32) -> Option<f32>,
-        leaf: impl FnMut(Range<usize>) -> Option<f32>,
+        leaf: impl FnMut(usize) -> Option<f32>,
     ) {
         self.walk::<true, true>(ray, t_max, node_tests, screen, leaf)
     }
@@ -404,12 +418,14 @@ impl<const W: usize> Bvh<W> {
         ray: &Ray,
         t_max: f32,
         node_tests: &mut u64,
-        mut leaf: impl FnMut(Range<usize>) -> Option<f32>,
+        mut leaf: impl FnMut(usize) -> Option<f32>,
     ) {
         use std::arch::x86_64::*;
         debug_assert!(W == 8);
         if let Some(r) = &self.root_leaf {
-            leaf(r.start as usize..r.end as usize);
+            if !r.is_empty() {
+                leaf(r.start as usize);
+            }
             return;
         }
         if self.nodes.is_empty() {
@@ -481,8 +497,7 @@ impl<const W: usize> Bvh<W> {
                         continue;
                     }
                 } else {
-                    let r = self.leaf_range(cur);
-                    match leaf(r) {
+                    match leaf((cur & !LEAF) as usize) {
                         Some(t) => t_max = t,
                         None => return,
                     }
@@ -507,20 +522,19 @@ impl<const W: usize> Bvh<W> {
     /// (node × W + position) and what it holds. The root is not a slot;
     /// when the whole tree is one leaf there are none.
     pub fn slots(&self) -> impl Iterator<Item = (usize, Slot)> + '_ {
-        (0..self.nodes.len()).rev().flat_map(move |n| {
-            let node = &self.nodes[n];
-            (0..W).map(move |k| {
-                let c = node.child[k];
-                let slot = if c == EMPTY {
-                    Slot::Empty
-                } else if c & LEAF != 0 {
-                    Slot::Leaf(self.leaf_range(c))
-                } else {
-                    Slot::Node(c as usize)
-                };
-                (n * W + k, slot)
-            })
-        })
+        let mut slots = vec![Slot::Empty; self.nodes.len() * W];
+        for (n, node) in self.nodes.iter().enumerate() {
+            for (k, &c) in node.child.iter().enumerate() {
+                if c != EMPTY && c & LEAF == 0 {
+                    slots[n * W + k] = Slot::Node(c as usize);
+                }
+            }
+        }
+        for l in &self.leaves {
+            slots[l.node as usize * W + l.slot as usize] =
+                Slot::Leaf(l.first as usize..(l.first + l.count) as usize);
+        }
+        slots.into_iter().enumerate().rev()
     }
 
     /// Number of slot ids ([`Bvh::slots`]): `W` per node.
@@ -537,10 +551,12 @@ impl<const W: usize> Bvh<W> {
         t_max: f32,
         node_tests: &mut u64,
         mut screen: impl FnMut(usize, f32, f32) -> Option<f32>,
-        mut leaf: impl FnMut(Range<usize>) -> Option<f32>,
+        mut leaf: impl FnMut(usize) -> Option<f32>,
     ) {
         if let Some(r) = &self.root_leaf {
-            leaf(r.start as usize..r.end as usize);
+            if !r.is_empty() {
+                leaf(r.start as usize);
+            }
             return;
         }
         if self.nodes.is_empty() {
@@ -554,7 +570,7 @@ impl<const W: usize> Bvh<W> {
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                match leaf(self.leaf_range(cur)) {
+                match leaf((cur & !LEAF) as usize) {
                     Some(t) => t_max = t,
                     None => return,
                 }
@@ -591,11 +607,13 @@ impl<const W: usize> Bvh<W> {
         }
     }
 
-    /// The range of [`Bvh::order`] of the leaf a slot names (`LEAF | i`).
-    #[inline(always)]
-    fn leaf_range(&self, slot: u32) -> Range<usize> {
-        let [first, count] = self.leaf_ranges[(slot & !LEAF) as usize];
-        first as usize..(first + count) as usize
+    /// Write each leaf's name (`LEAF | first`) into its slot, once the
+    /// order is final.
+    fn name_leaves(&mut self) {
+        for l in &self.leaves {
+            assert!(l.first < LEAF, "a BVH holds fewer than 2^31 entries");
+            self.nodes[l.node as usize].child[l.slot as usize] = LEAF | l.first;
+        }
     }
 
     /// Node `i` of the traversal, without a bounds check: every index the
@@ -657,8 +675,17 @@ fn descend<const W: usize>(
     }
 }
 
-/// Marks a leaf slot (`LEAF | index into leaf_ranges`); a node index has
-/// this bit clear.
+/// A leaf: its range of the order and the slot that names it.
+#[derive(Clone, Copy, Debug)]
+struct LeafInfo {
+    first: u32,
+    count: u32,
+    node: u32,
+    slot: u32,
+}
+
+/// Marks a leaf slot (`LEAF | first entry`); a node index has this bit
+/// clear.
 const LEAF: u32 = 1 << 31;
 /// An unused slot (its box is empty, so it is never entered).
 const EMPTY: u32 = u32::MAX;
@@ -842,7 +869,13 @@ impl Builder<'_> {
 
     /// SAH cost of making `n` primitives a leaf, relative to traversing a node.
     fn leaf_cost(&self, n: usize) -> f32 {
-        n as f32 * self.params.prim_cost
+        self.blocks(n) * self.params.prim_cost
+    }
+
+    /// Blocks `n` primitives take.
+    #[inline]
+    fn blocks(&self, n: usize) -> f32 {
+        n.div_ceil(self.params.block.max(1)) as f32
     }
 
     /// The cheapest binned split, if the centroids spread over more than one bin.
@@ -880,7 +913,8 @@ impl Builder<'_> {
                     continue;
                 }
                 let cost = 1.0
-                    + self.params.prim_cost * (area(&lb) * ln as f32 + ra * rn as f32)
+                    + self.params.prim_cost
+                        * (area(&lb) * self.blocks(ln as usize) + ra * self.blocks(rn as usize))
                         / parent.max(f32::MIN_POSITIVE);
                 if best.as_ref().is_none_or(|b| cost < b.cost) {
                     best = Some(Split { axis, bin: k, cost });
@@ -1120,6 +1154,9 @@ mod tests {
     /// Every box a ray overlaps (by the kernel's scalar slab test) is in a
     /// leaf the traversal visits, and every primitive is in exactly one leaf.
     fn check<const W: usize>(boxes: &[Bounds3], bvh: &Bvh<W>, seed: u64) {
+        let leaves: std::collections::HashMap<usize, Range<usize>> =
+            bvh.leaves().map(|r| (r.start, r)).collect();
+        assert_eq!(leaves.len(), bvh.leaves().count(), "leaves share a first entry");
         let mut ids = bvh.order.clone();
         ids.sort_unstable();
         assert_eq!(ids, (0..boxes.len() as u32).collect::<Vec<_>>());
@@ -1148,8 +1185,8 @@ mod tests {
                 })
                 .collect();
             let mut got = Vec::new();
-            bvh.traverse(&ray, f32::INFINITY, &mut 0, |range| {
-                got.extend(range.map(|k| bvh.order[k]));
+            bvh.traverse(&ray, f32::INFINITY, &mut 0, |first| {
+                got.extend(leaves[&first].clone().map(|k| bvh.order[k]));
                 Some(f32::INFINITY)
             });
             got.sort_unstable();

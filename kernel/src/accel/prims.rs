@@ -114,6 +114,10 @@ struct Tri4 {
     /// triangle or a gap (screened 4-wide); 0 when it holds another kind
     /// (queried entry by entry).
     lanes: u32,
+    /// Entries that are not gaps (they come first).
+    entries: u32,
+    /// A leaf ends with this block ([`Primitives::mark_leaves`]).
+    last: bool,
 }
 
 /// What the 4-wide screen needs of a ray, computed once per query: the
@@ -160,6 +164,8 @@ impl Tri4 {
             v,
             refs,
             lanes: if packed { lanes } else { 0 },
+            entries: refs.iter().filter(|&&r| r != GAP).count() as u32,
+            last: false,
         }
     }
 
@@ -170,28 +176,34 @@ impl Tri4 {
         [0, 1, 2].map(|k| [v[k][0][lane], v[k][1][lane], v[k][2][lane]])
     }
 
-    /// The lanes the exact test may accept below `t_max`: it rejects a lane
-    /// only where the scalar watertight test (same operations, same order,
-    /// per lane) decides a miss in f32 — mixed edge-function signs, or `t`
-    /// beyond `t_max` widened by 1 + γ₄ — and keeps every lane with an
-    /// exactly zero edge function (the scalar test decides those in f64). A
-    /// `t` behind the origin is left to the scalar test too: within its
-    /// error bound of 0 the exact orientation decides (`Core::Near`). One
-    /// case differs: a `t` beyond `t_max` yet within its error bound of 0,
-    /// which the scalar test resolves in f64, is rejected here — it needs a
-    /// `t_max` within the rounding of the ray's origin, which rtk's spawned
-    /// rays never have (their offset keeps `t_min` past it).
+    /// The 4-wide watertight test over `(t_min, t_max)`: per lane, the
+    /// scalar test's operations in the same order ([`intersect_triangle_sheared`]),
+    /// so a lane it decides gets the scalar test's `t` and barycentrics bit
+    /// for bit. Lanes it cannot decide in f32 — an exactly zero edge
+    /// function (decided in f64), a `t` within its error bound of 0 — are
+    /// left to the scalar test (`slow`). One case differs, as documented
+    /// for the scalar test's callers: a `t` beyond `t_max` yet within its
+    /// error bound of 0, which the scalar test resolves in f64, is rejected
+    /// here; it needs a `t_max` within the rounding of the ray's origin,
+    /// which rtk's spawned rays never have (their offset keeps `t_min` past
+    /// it).
     #[inline(always)]
-    fn screen(&self, r: &ScreenRay, t_max: f32) -> u32 {
+    fn test(&self, r: &ScreenRay, t_min: f32, t_max: f32) -> Lanes4 {
         #[cfg(target_arch = "x86_64")]
         {
             // SAFETY: SSE/SSE2 only, part of every x86_64 CPU.
-            unsafe { self.screen_sse(r, t_max) }
+            unsafe { self.test_sse(r, t_min, t_max) }
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
-            let _ = (r, t_max);
-            0b1111
+            let _ = (r, t_min, t_max);
+            Lanes4 {
+                hit: 0,
+                slow: 0b1111,
+                t: [0.0; 4],
+                b1: [0.0; 4],
+                b2: [0.0; 4],
+            }
         }
     }
 
@@ -199,13 +211,21 @@ impl Tri4 {
     /// The CPU must have SSE2 (every x86_64 CPU does).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn screen_sse(&self, r: &ScreenRay, t_max: f32) -> u32 {
+    unsafe fn test_sse(&self, r: &ScreenRay, t_min: f32, t_max: f32) -> Lanes4 {
+        use crate::geom::gamma;
         use std::arch::x86_64::*;
         let (o, k, s) = (r.o, r.k, r.s);
         debug_assert!(k.iter().all(|&a| a < 3));
+        let mut out = Lanes4 {
+            hit: 0,
+            slow: 0,
+            t: [0.0; 4],
+            b1: [0.0; 4],
+            b2: [0.0; 4],
+        };
         // SAFETY: `k` holds axes (0..3), so each row read is one of the
-        // block's (four floats, 16-byte aligned); the rest is register
-        // arithmetic.
+        // block's (four floats, 16-byte aligned); the stores are to `out`'s
+        // arrays of four; the rest is register arithmetic.
         unsafe {
             let load = |vert: &[[f32; 4]; 3], a: usize| _mm_load_ps(vert.as_ptr().add(a).cast());
             let (sx, sy, sz) = (_mm_set1_ps(s[0]), _mm_set1_ps(s[1]), _mm_set1_ps(s[2]));
@@ -239,14 +259,91 @@ impl Tri4 {
             // order, so a lane is rejected only where it rejects too.
             let lim = _mm_mul_ps(
                 _mm_mul_ps(_mm_set1_ps(t_max), det),
-                _mm_set1_ps(1.0 + crate::geom::gamma::<f32>(4)),
+                _mm_set1_ps(1.0 + gamma::<f32>(4)),
             );
-            let neg_ok = _mm_and_ps(_mm_cmplt_ps(det, zero), _mm_cmpge_ps(ts, lim));
-            let pos_ok = _mm_and_ps(_mm_cmpgt_ps(det, zero), _mm_cmple_ps(ts, lim));
-            let in_range = _mm_andnot_ps(mixed, _mm_or_ps(neg_ok, pos_ok));
-            _mm_movemask_ps(_mm_or_ps(has_zero, in_range)) as u32
+            let neg = _mm_cmplt_ps(det, zero);
+            let pos = _mm_cmpgt_ps(det, zero);
+            let within = _mm_andnot_ps(
+                mixed,
+                _mm_or_ps(
+                    _mm_and_ps(neg, _mm_cmpge_ps(ts, lim)),
+                    _mm_and_ps(pos, _mm_cmple_ps(ts, lim)),
+                ),
+            );
+            let zeros = _mm_movemask_ps(has_zero) as u32;
+            if _mm_movemask_ps(within) as u32 & !zeros == 0 {
+                // Nothing to finish here: every lane missed, or is the
+                // scalar test's (an exactly zero edge function).
+                out.slow = zeros;
+                return out;
+            }
+            // pbrt-v4's error bound of ts, as the scalar test computes it.
+            let abs = |x: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), x);
+            let max3 = |v: [__m128; 3]| _mm_max_ps(_mm_max_ps(abs(v[0]), abs(v[1])), abs(v[2]));
+            let (max_zt, max_xt, max_yt) = (max3(pz), max3(px), max3(py));
+            let g = |n: u32| _mm_set1_ps(gamma::<f32>(n));
+            let dz = _mm_mul_ps(g(3), max_zt);
+            let dx = _mm_mul_ps(g(5), _mm_add_ps(max_xt, max_zt));
+            let dy = _mm_mul_ps(g(5), _mm_add_ps(max_yt, max_zt));
+            let de = _mm_mul_ps(
+                _mm_set1_ps(2.0),
+                _mm_add_ps(
+                    _mm_add_ps(
+                        _mm_mul_ps(_mm_mul_ps(g(2), max_xt), max_yt),
+                        _mm_mul_ps(dy, max_xt),
+                    ),
+                    _mm_mul_ps(dx, max_yt),
+                ),
+            );
+            let max_e = max3([e0, e1, e2]);
+            let ts_err = _mm_mul_ps(
+                _mm_set1_ps(3.0),
+                _mm_add_ps(
+                    _mm_add_ps(
+                        _mm_mul_ps(_mm_mul_ps(g(3), max_e), max_zt),
+                        _mm_mul_ps(de, max_zt),
+                    ),
+                    _mm_mul_ps(dz, max_e),
+                ),
+            );
+            let inv = _mm_div_ps(_mm_set1_ps(1.0), det);
+            let t = _mm_mul_ps(ts, inv);
+            let dt = _mm_mul_ps(ts_err, abs(inv));
+            let ahead = _mm_or_ps(
+                _mm_and_ps(neg, _mm_cmplt_ps(ts, zero)),
+                _mm_and_ps(pos, _mm_cmpgt_ps(ts, zero)),
+            );
+            // Behind the origin: a miss, unless within the error of 0.
+            let near0 = _mm_cmple_ps(abs(ts), ts_err);
+            let behind = _mm_and_ps(_mm_andnot_ps(ahead, within), near0);
+            let ahead = _mm_and_ps(ahead, within);
+            let clear = _mm_cmpgt_ps(t, dt);
+            let slow = _mm_or_ps(_mm_or_ps(has_zero, behind), _mm_andnot_ps(clear, ahead));
+            let hit = _mm_and_ps(
+                _mm_and_ps(ahead, clear),
+                _mm_and_ps(
+                    _mm_cmpgt_ps(t, _mm_set1_ps(t_min)),
+                    _mm_cmplt_ps(t, _mm_set1_ps(t_max)),
+                ),
+            );
+            out.slow = _mm_movemask_ps(slow) as u32;
+            out.hit = _mm_movemask_ps(_mm_andnot_ps(slow, hit)) as u32;
+            _mm_storeu_ps(out.t.as_mut_ptr(), t);
+            _mm_storeu_ps(out.b1.as_mut_ptr(), _mm_mul_ps(e1, inv));
+            _mm_storeu_ps(out.b2.as_mut_ptr(), _mm_mul_ps(e2, inv));
+            out
         }
     }
+}
+
+/// What the 4-wide test decided: lanes hit (with their `t` and
+/// barycentrics), and lanes left to the scalar test.
+struct Lanes4 {
+    hit: u32,
+    slow: u32,
+    t: [f32; 4],
+    b1: [f32; 4],
+    b2: [f32; 4],
 }
 
 /// What [`Primitives::gather`] returns besides the table: each primitive's box,
@@ -482,10 +579,41 @@ impl Primitives {
         self.tris = Vec::new();
     }
 
+    /// Mark where each leaf ends (after [`Primitives::pack`]), for
+    /// [`Primitives::intersect_leaf`], which is given only a leaf's first
+    /// entry.
+    pub fn mark_leaves(&mut self, leaves: impl Iterator<Item = std::ops::Range<usize>>) {
+        for r in leaves.filter(|r| !r.is_empty()) {
+            debug_assert!(r.start.is_multiple_of(4), "leaves start blocks");
+            self.blocks[(r.end - 1) / 4].last = true;
+        }
+    }
+
+    /// Nearest hit among the entries of the leaf starting at `first` (a
+    /// table packed and marked: [`Primitives::mark_leaves`]): its blocks
+    /// are read up to the one marked last, and nothing else.
+    #[inline(always)]
+    pub fn intersect_leaf(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &mut Nearest,
+        first: usize,
+        hit: &mut Hit,
+        level: u32,
+    ) {
+        let mut b = first / 4;
+        loop {
+            let block = &self.blocks[b];
+            self.intersect_block(ctx, q, b, block.entries as usize, hit, level);
+            if block.last {
+                return;
+            }
+            b += 1;
+        }
+    }
+
     /// Nearest hit among the entries of `range` (a leaf of a structure that
-    /// called [`Primitives::pack`]): a packed block's triangles are screened
-    /// four at a time (the same arithmetic per lane as the scalar test, so
-    /// no hit is lost), and only the survivors take the exact test.
+    /// called [`Primitives::pack`], starting a block).
     #[inline(always)]
     pub fn intersect_range(
         &self,
@@ -495,29 +623,76 @@ impl Primitives {
         hit: &mut Hit,
         level: u32,
     ) {
-        let d = q.ray.dir.to_array();
-        let first = range.start / 4;
-        let blocks = &self.blocks[first..range.end.div_ceil(4)];
-        for (k, block) in blocks.iter().enumerate() {
-            let start = (first + k) * 4;
-            let ids = start.max(range.start)..(start + 4).min(range.end);
-            if block.lanes == 0 {
-                self.intersect_ids(ctx, q, ids, hit, level);
-                continue;
+        for b in range.start / 4..range.end.div_ceil(4) {
+            let n = (range.end - 4 * b).min(4);
+            self.intersect_block(ctx, q, b, n, hit, level);
+        }
+    }
+
+    /// The first `n` entries of block `b`: a packed block's triangles are
+    /// screened four at a time (the same arithmetic per lane as the scalar
+    /// test, so no hit is lost) and only the survivors take the exact
+    /// test; another block is queried entry by entry.
+    #[inline(always)]
+    fn intersect_block(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &mut Nearest,
+        b: usize,
+        n: usize,
+        hit: &mut Hit,
+        level: u32,
+    ) {
+        let block = &self.blocks[b];
+        if block.lanes == 0 {
+            return self.intersect_ids(ctx, q, 4 * b..4 * b + n, hit, level);
+        }
+        ctx.stats.prim_tests += n as u64;
+        // Test with the loosest limit a tie could need; each hit is then
+        // held to its own (`Nearest::limit`), in lane order.
+        let limit = if q.found() {
+            q.ray.t_max.next_up()
+        } else {
+            q.ray.t_max
+        };
+        let valid = block.lanes & ((1 << n) - 1);
+        let l = block.test(&q.screen, q.ray.t_min, limit);
+        let mut mask = (l.hit | l.slow) & valid;
+        while mask != 0 {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let r = block.refs[lane];
+            if l.slow >> lane & 1 == 1 {
+                let d = q.ray.dir.to_array();
+                self.triangle(q, d, r, block.tri(lane), hit, level);
+            } else if l.t[lane] < q.limit(r.key()) {
+                q.ray.t_max = l.t[lane];
+                q.best = r.key();
+                hit.stack[level as usize] = HitEntry {
+                    index: r.child,
+                    prim: 0,
+                    uv: [0.0; 2],
+                };
+                hit.record_leaf(level + 1, l.t[lane], r.prim, [l.b1[lane], l.b2[lane]]);
             }
-            ctx.stats.prim_tests += ids.len() as u64;
-            // Screen with the loosest limit a tie could need.
-            let limit = if q.found() {
-                q.ray.t_max.next_up()
-            } else {
-                q.ray.t_max
-            };
-            let mut mask = block.screen(&q.screen, limit) & block.lanes;
-            while mask != 0 {
-                let lane = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                self.triangle(q, d, block.refs[lane], block.tri(lane), hit, level);
+        }
+    }
+
+    /// Any hit among the entries of the leaf starting at `first` (see
+    /// [`Primitives::intersect_leaf`]).
+    #[inline(always)]
+    pub fn occluded_leaf(&self, ctx: &mut TraceCtx, ray: &Ray, first: usize, level: u32) -> bool {
+        let pre = Occlusion::new(ray);
+        let mut b = first / 4;
+        loop {
+            let block = &self.blocks[b];
+            if self.occluded_block(ctx, &pre, b, block.entries as usize, level) {
+                return true;
             }
+            if block.last {
+                return false;
+            }
+            b += 1;
         }
     }
 
@@ -530,29 +705,40 @@ impl Primitives {
         range: std::ops::Range<usize>,
         level: u32,
     ) -> bool {
-        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
-        let shear = RayShear::new(o, d);
-        let screen = ScreenRay::new(&shear);
-        let first = range.start / 4;
-        let blocks = &self.blocks[first..range.end.div_ceil(4)];
-        for (k, block) in blocks.iter().enumerate() {
-            let start = (first + k) * 4;
-            let ids = start.max(range.start)..(start + 4).min(range.end);
-            if block.lanes == 0 {
-                if self.occluded_ids(ctx, ray, ids, level) {
-                    return true;
-                }
-                continue;
-            }
-            ctx.stats.prim_tests += ids.len() as u64;
-            let mut mask = block.screen(&screen, ray.t_max) & block.lanes;
-            while mask != 0 {
-                let lane = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let t = block.tri(lane);
-                if intersect_triangle_sheared(&shear, d, t, ray.t_min, ray.t_max).is_some() {
-                    return true;
-                }
+        let pre = Occlusion::new(ray);
+        (range.start / 4..range.end.div_ceil(4))
+            .any(|b| self.occluded_block(ctx, &pre, b, (range.end - 4 * b).min(4), level))
+    }
+
+    /// Any hit among the first `n` entries of block `b`.
+    #[inline(always)]
+    fn occluded_block(
+        &self,
+        ctx: &mut TraceCtx,
+        pre: &Occlusion,
+        b: usize,
+        n: usize,
+        level: u32,
+    ) -> bool {
+        let block = &self.blocks[b];
+        let ray = &pre.ray;
+        if block.lanes == 0 {
+            return self.occluded_ids(ctx, ray, 4 * b..4 * b + n, level);
+        }
+        ctx.stats.prim_tests += n as u64;
+        let valid = block.lanes & ((1 << n) - 1);
+        let l = block.test(&pre.screen, ray.t_min, ray.t_max);
+        if l.hit & valid != 0 {
+            return true;
+        }
+        let d = ray.dir.to_array();
+        let mut mask = l.slow & valid;
+        while mask != 0 {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let t = block.tri(lane);
+            if intersect_triangle_sheared(&pre.shear, d, t, ray.t_min, ray.t_max).is_some() {
+                return true;
             }
         }
         false
@@ -655,6 +841,25 @@ impl Primitives {
     }
 }
 
+/// An any-hit query's ray and its shear, computed once per leaf.
+struct Occlusion {
+    ray: Ray,
+    shear: RayShear<f32>,
+    screen: ScreenRay,
+}
+
+impl Occlusion {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let shear = RayShear::new(ray.origin.to_array(), ray.dir.to_array());
+        Occlusion {
+            ray: *ray,
+            screen: ScreenRay::new(&shear),
+            shear,
+        }
+    }
+}
+
 /// The entry of a gap in a padded order.
 const GAP: PrimRef = PrimRef {
     child: u32::MAX,
@@ -703,4 +908,83 @@ pub fn tri_bounds(v: &[[f32; 3]; 3]) -> Bounds3 {
         .include(v[0].into())
         .include(v[1].into())
         .include(v[2].into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::RngState;
+
+    /// Triangles that stress the test: random ones, pairs sharing an edge
+    /// the ray crosses, axis-aligned ones (exactly zero edge functions
+    /// for axis-parallel rays), and ones the ray's origin touches.
+    fn tri(r: &mut RngState, o: [f32; 3], d: [f32; 3], k: usize) -> [[f32; 3]; 3] {
+        let p = |r: &mut RngState| [0, 1, 2].map(|_| r.range_f32(-2.0, 2.0));
+        match k % 4 {
+            0 => [p(r), p(r), p(r)],
+            1 => {
+                // An edge through a point of the ray.
+                let t = r.range_f32(-1.0, 3.0);
+                let m = [0, 1, 2].map(|a| o[a] + t * d[a]);
+                let a = p(r);
+                let b = [0, 1, 2].map(|i| 2.0 * m[i] - a[i]);
+                [a, b, p(r)]
+            }
+            2 => {
+                let z = r.range_f32(-2.0, 2.0);
+                let mut q = [p(r), p(r), p(r)];
+                for v in &mut q {
+                    v[2] = z;
+                }
+                q
+            }
+            _ => [o, p(r), p(r)],
+        }
+    }
+
+    /// Every lane the 4-wide test decides is decided as the scalar test
+    /// decides it: a hit with the same `t` and barycentrics bit for bit,
+    /// a miss where it misses.
+    #[test]
+    fn the_4_wide_test_decides_as_the_scalar_test() {
+        let mut r = RngState::seeded(21);
+        let (mut hits, mut slow) = (0, 0);
+        for n in 0..40_000 {
+            let o = [0, 1, 2].map(|_| r.range_f32(-3.0, 3.0));
+            let mut d = [0, 1, 2].map(|_| r.range_f32(-1.0, 1.0));
+            if n % 3 == 0 {
+                d = [[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, -0.0, 0.0]][n % 9 / 3];
+            }
+            let tris: Vec<_> = (0..4).map(|k| tri(&mut r, o, d, n + k)).collect();
+            let block = Tri4::new(
+                &tris
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &t)| (t, PrimRef { child: 0, prim: i as u32 }, true))
+                    .collect::<Vec<_>>(),
+            );
+            let shear = RayShear::new(o, d);
+            let (t_min, t_max) = [(0.0, f32::INFINITY), (0.0, 1.5), (0.25, 2.0)][n % 3];
+            let l = block.test(&ScreenRay::new(&shear), t_min, t_max);
+            assert_eq!(l.hit & l.slow, 0);
+            for lane in 0..4 {
+                if l.slow >> lane & 1 == 1 {
+                    slow += 1;
+                    continue;
+                }
+                let want = intersect_triangle_sheared(&shear, d, tris[lane], t_min, t_max);
+                if l.hit >> lane & 1 == 1 {
+                    hits += 1;
+                    let h = want.unwrap_or_else(|| panic!("ray {n} lane {lane}: scalar misses"));
+                    assert_eq!(h.t.to_bits(), l.t[lane].to_bits(), "ray {n} lane {lane}");
+                    assert_eq!(h.b[1].to_bits(), l.b1[lane].to_bits());
+                    assert_eq!(h.b[2].to_bits(), l.b2[lane].to_bits());
+                } else {
+                    assert!(want.is_none(), "ray {n} lane {lane}: scalar hits {want:?}");
+                }
+            }
+        }
+        // Both paths are exercised.
+        assert!(hits > 2_000 && slow > 1_000, "hits {hits}, slow {slow}");
+    }
 }

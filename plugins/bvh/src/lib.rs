@@ -82,7 +82,11 @@ impl Plugin for BvhObject {
             children: Vec::new(),
             params: BuildParams {
                 max_leaf: p.max_leaf as usize,
-                ..BuildParams::default()
+                // Leaves are tested four triangles at a time, a block
+                // costing about what a node does (measured flat between
+                // 0.5 and 2 on the dragon's primary rays, BENCHMARKS.md).
+                prim_cost: 1.0,
+                block: 4,
             },
             width,
             bound: p.bound,
@@ -120,6 +124,7 @@ fn build<const W: usize>(
         )?),
     };
     prims.pack();
+    prims.mark_leaves(bvh.leaves());
     Ok((prims, bvh, volumes))
 }
 
@@ -136,7 +141,7 @@ fn intersect_in<const W: usize>(
     let mut q = Nearest::new(ray);
     let mut nodes = 0;
     let leaf = |leaf| {
-        b.prims.intersect_range(ctx, &mut q, leaf, hit, level);
+        b.prims.intersect_leaf(ctx, &mut q, leaf, hit, level);
         Some(cull_bound(q.ray.t_max))
     };
     // Boxes within the tie margin of the best hit are still entered
@@ -176,7 +181,7 @@ fn occluded_in<const W: usize>(
     let mut nodes = 0;
     // Any hit will do: no tie to keep, no margin.
     let leaf = |leaf| {
-        found = b.prims.occluded_range(ctx, ray, leaf, level);
+        found = b.prims.occluded_leaf(ctx, ray, leaf, level);
         (!found).then_some(ray.t_max)
     };
     match &b.volumes {
