@@ -329,7 +329,7 @@ impl<const W: usize> Bvh<W> {
         ray: &Ray,
         t_max: f32,
         node_tests: &mut u64,
-        leaf: impl FnMut(usize) -> Option<f32>,
+        leaf: impl Visit,
     ) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
@@ -348,7 +348,7 @@ impl<const W: usize> Bvh<W> {
         ray: &Ray,
         t_max: f32,
         node_tests: &mut u64,
-        leaf: impl FnMut(usize) -> Option<f32>,
+        leaf: impl Visit,
     ) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
@@ -373,7 +373,7 @@ impl<const W: usize> Bvh<W> {
         t_max: f32,
         node_tests: &mut u64,
         screen: impl FnMut(usize, f32, f32) -> Option<f32>,
-        leaf: impl FnMut(usize) -> Option<f32>,
+        leaf: impl Visit,
     ) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
@@ -396,7 +396,7 @@ impl<const W: usize> Bvh<W> {
         t_max: f32,
         node_tests: &mut u64,
         screen: impl FnMut(usize, f32, f32) -> Option<f32>,
-        leaf: impl FnMut(usize) -> Option<f32>,
+        leaf: impl Visit,
     ) {
         self.walk::<true, true>(ray, t_max, node_tests, screen, leaf)
     }
@@ -418,13 +418,13 @@ impl<const W: usize> Bvh<W> {
         ray: &Ray,
         t_max: f32,
         node_tests: &mut u64,
-        mut leaf: impl FnMut(usize) -> Option<f32>,
+        mut leaf: impl Visit,
     ) {
         use std::arch::x86_64::*;
         debug_assert!(W == 8);
         if let Some(r) = &self.root_leaf {
             if !r.is_empty() {
-                leaf(r.start as usize);
+                leaf.leaf(r.start as usize);
             }
             return;
         }
@@ -497,7 +497,7 @@ impl<const W: usize> Bvh<W> {
                         continue;
                     }
                 } else {
-                    match leaf((cur & !LEAF) as usize) {
+                    match leaf.leaf((cur & !LEAF) as usize) {
                         Some(t) => t_max = t,
                         None => return,
                     }
@@ -551,11 +551,11 @@ impl<const W: usize> Bvh<W> {
         t_max: f32,
         node_tests: &mut u64,
         mut screen: impl FnMut(usize, f32, f32) -> Option<f32>,
-        mut leaf: impl FnMut(usize) -> Option<f32>,
+        mut leaf: impl Visit,
     ) {
         if let Some(r) = &self.root_leaf {
             if !r.is_empty() {
-                leaf(r.start as usize);
+                leaf.leaf(r.start as usize);
             }
             return;
         }
@@ -570,7 +570,7 @@ impl<const W: usize> Bvh<W> {
         let mut cur = 0u32;
         loop {
             if cur & LEAF != 0 {
-                match leaf((cur & !LEAF) as usize) {
+                match leaf.leaf((cur & !LEAF) as usize) {
                     Some(t) => t_max = t,
                     None => return,
                 }
@@ -672,6 +672,24 @@ fn descend<const W: usize>(
     match stack.pop() {
         Some((c, _)) => c,
         None => unreachable!("three or more children were pushed"),
+    }
+}
+
+/// What a traversal does at a leaf: test the primitives of the leaf
+/// starting at entry `first` and return the narrowed `t_max`, or `None` to
+/// stop. Any `FnMut(usize) -> Option<f32>` will do; a hot path implements
+/// it on a struct with `#[inline(always)]`, so the leaf test is compiled
+/// into the walk (with its SIMD features, and without spilling the ray's
+/// registers around a call), which a closure cannot ask for.
+pub trait Visit {
+    /// Test the leaf starting at `first`.
+    fn leaf(&mut self, first: usize) -> Option<f32>;
+}
+
+impl<F: FnMut(usize) -> Option<f32>> Visit for F {
+    #[inline(always)]
+    fn leaf(&mut self, first: usize) -> Option<f32> {
+        self(first)
     }
 }
 
@@ -963,6 +981,7 @@ const FAR_SCALE: f32 = {
 };
 
 impl Precomp {
+    #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
         // 1/±0 = ±inf: an axis the ray does not move along.

@@ -14,9 +14,9 @@ mod bvh;
 mod mailbox;
 mod prims;
 
-pub use bvh::{BuildParams, Bvh, Bvh4, Bvh8, Slot, MAX_DEPTH, PAD};
+pub use bvh::{BuildParams, Bvh, Bvh4, Bvh8, Slot, Visit, MAX_DEPTH, PAD};
 pub use mailbox::Mailbox;
-pub use prims::{tri_bounds, Gathered, Nearest, PrimRef, Primitives, WHOLE};
+pub use prims::{tri_bounds, AnyHit, Gathered, Nearest, PrimRef, Primitives, WHOLE};
 
 /// The distance beyond which a front-to-back traversal may skip a box or
 /// cell, given the best hit's `t`: `t` widened by 2⁻¹⁴ relative.

@@ -131,6 +131,7 @@ pub struct ScreenRay {
 }
 
 impl ScreenRay {
+    #[inline(always)]
     fn new(r: &RayShear<f32>) -> Self {
         let (o, k, s) = r.parts();
         ScreenRay {
@@ -679,10 +680,16 @@ impl Primitives {
     }
 
     /// Any hit among the entries of the leaf starting at `first` (see
-    /// [`Primitives::intersect_leaf`]).
+    /// [`Primitives::intersect_leaf`]), for the query `q` (made once per ray).
     #[inline(always)]
-    pub fn occluded_leaf(&self, ctx: &mut TraceCtx, ray: &Ray, first: usize, level: u32) -> bool {
-        let pre = Occlusion::new(ray);
+    pub fn occluded_leaf(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &AnyHit,
+        first: usize,
+        level: u32,
+    ) -> bool {
+        let pre = q;
         let mut b = first / 4;
         loop {
             let block = &self.blocks[b];
@@ -705,7 +712,7 @@ impl Primitives {
         range: std::ops::Range<usize>,
         level: u32,
     ) -> bool {
-        let pre = Occlusion::new(ray);
+        let pre = AnyHit::new(ray);
         (range.start / 4..range.end.div_ceil(4))
             .any(|b| self.occluded_block(ctx, &pre, b, (range.end - 4 * b).min(4), level))
     }
@@ -715,7 +722,7 @@ impl Primitives {
     fn occluded_block(
         &self,
         ctx: &mut TraceCtx,
-        pre: &Occlusion,
+        pre: &AnyHit,
         b: usize,
         n: usize,
         level: u32,
@@ -841,18 +848,26 @@ impl Primitives {
     }
 }
 
-/// An any-hit query's ray and its shear, computed once per leaf.
-struct Occlusion {
+/// An any-hit query: the ray and what the triangle tests need of it,
+/// computed once per ray.
+pub struct AnyHit {
     ray: Ray,
     shear: RayShear<f32>,
     screen: ScreenRay,
 }
 
-impl Occlusion {
+impl AnyHit {
+    /// The end of the interval searched.
     #[inline(always)]
-    fn new(ray: &Ray) -> Self {
+    pub fn t_max(&self) -> f32 {
+        self.ray.t_max
+    }
+
+    /// The query of `ray` over `(ray.t_min, ray.t_max)`.
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
         let shear = RayShear::new(ray.origin.to_array(), ray.dir.to_array());
-        Occlusion {
+        AnyHit {
             ray: *ray,
             screen: ScreenRay::new(&shear),
             shear,

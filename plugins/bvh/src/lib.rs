@@ -1,6 +1,8 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::accel::{cull_bound, BuildParams, Bvh, Nearest, Primitives, Slot};
+use rtk_kernel::accel::{
+    cull_bound, AnyHit, BuildParams, Bvh, Nearest, Primitives, Slot, Visit,
+};
 use rtk_kernel::geom::{overlaps, SlabRay, SphereRay};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -140,9 +142,12 @@ fn intersect_in<const W: usize>(
 ) -> bool {
     let mut q = Nearest::new(ray);
     let mut nodes = 0;
-    let leaf = |leaf| {
-        b.prims.intersect_leaf(ctx, &mut q, leaf, hit, level);
-        Some(cull_bound(q.ray.t_max))
+    let leaf = NearestLeaf {
+        prims: &b.prims,
+        ctx,
+        q: &mut q,
+        hit,
+        level,
     };
     // Boxes within the tie margin of the best hit are still entered
     // (rule 11, `cull_bound`).
@@ -168,6 +173,41 @@ fn intersect_in<const W: usize>(
     q.found()
 }
 
+/// The leaf test of a nearest-hit query, compiled into the walk
+/// ([`Visit`]).
+struct NearestLeaf<'a> {
+    prims: &'a Primitives,
+    ctx: &'a mut TraceCtx,
+    q: &'a mut Nearest,
+    hit: &'a mut Hit,
+    level: u32,
+}
+
+impl Visit for NearestLeaf<'_> {
+    #[inline(always)]
+    fn leaf(&mut self, first: usize) -> Option<f32> {
+        (self.prims).intersect_leaf(self.ctx, self.q, first, self.hit, self.level);
+        Some(cull_bound(self.q.ray.t_max))
+    }
+}
+
+/// The leaf test of an any-hit query, compiled into the walk.
+struct AnyLeaf<'a> {
+    prims: &'a Primitives,
+    ctx: &'a mut TraceCtx,
+    q: &'a AnyHit,
+    found: &'a mut bool,
+    level: u32,
+}
+
+impl Visit for AnyLeaf<'_> {
+    #[inline(always)]
+    fn leaf(&mut self, first: usize) -> Option<f32> {
+        *self.found = (self.prims).occluded_leaf(self.ctx, self.q, first, self.level);
+        (!*self.found).then_some(self.q.t_max())
+    }
+}
+
 /// Any hit through a `W`-wide tree.
 #[inline(always)]
 fn occluded_in<const W: usize>(
@@ -179,10 +219,14 @@ fn occluded_in<const W: usize>(
 ) -> bool {
     let mut found = false;
     let mut nodes = 0;
+    let q = AnyHit::new(ray);
     // Any hit will do: no tie to keep, no margin.
-    let leaf = |leaf| {
-        found = b.prims.occluded_leaf(ctx, ray, leaf, level);
-        (!found).then_some(ray.t_max)
+    let leaf = AnyLeaf {
+        prims: &b.prims,
+        ctx,
+        q: &q,
+        found: &mut found,
+        level,
     };
     match &b.volumes {
         Volumes::None => bvh.traverse_any(ray, ray.t_max, &mut nodes, leaf),
