@@ -151,7 +151,17 @@ impl<const W: usize> Bvh<W> {
     pub fn simd_available() -> bool {
         #[cfg(target_arch = "x86_64")]
         {
-            W == 4 || (W == 8 && std::arch::is_x86_feature_detected!("avx2"))
+            use std::arch::is_x86_feature_detected as has;
+            // Every CPU with AVX2 has these too (Haswell, Zen); the walk is
+            // compiled for all of them (POPCNT and TZCNT count children).
+            W == 4
+                || (W == 8
+                    && has!("avx2")
+                    && has!("fma")
+                    && has!("bmi1")
+                    && has!("bmi2")
+                    && has!("popcnt")
+                    && has!("lzcnt"))
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
@@ -324,13 +334,7 @@ impl<const W: usize> Bvh<W> {
     /// node's precomputed order for the ray's octant (`Node::perm`), which
     /// costs one permutation instead of a sort.
     #[inline]
-    pub fn traverse(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        node_tests: &mut u64,
-        leaf: impl Visit,
-    ) {
+    pub fn traverse(&self, ray: &Ray, t_max: f32, node_tests: &mut u64, leaf: impl Visit) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only when the CPU has AVX2 (and W = 8).
@@ -343,13 +347,7 @@ impl<const W: usize> Bvh<W> {
     /// [`traverse`](Self::traverse) for any-hit queries, which stop at the
     /// first hit: the children are visited in slot order, with no ranking.
     #[inline]
-    pub fn traverse_any(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        node_tests: &mut u64,
-        leaf: impl Visit,
-    ) {
+    pub fn traverse_any(&self, ray: &Ray, t_max: f32, node_tests: &mut u64, leaf: impl Visit) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only when the CPU has AVX2 (and W = 8).
@@ -389,7 +387,7 @@ impl<const W: usize> Bvh<W> {
     /// # Safety
     /// The CPU must have AVX2.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,popcnt,lzcnt")]
     unsafe fn walk_avx2_screened(
         &self,
         ray: &Ray,
@@ -412,7 +410,7 @@ impl<const W: usize> Bvh<W> {
     /// # Safety
     /// The CPU must have AVX2; `W` must be 8.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,popcnt,lzcnt")]
     unsafe fn walk8_avx2<const ORDERED: bool>(
         &self,
         ray: &Ray,
@@ -447,9 +445,11 @@ impl<const W: usize> Bvh<W> {
         // (32 bytes at a 32-byte offset of a 64-byte aligned node) or of the
         // stack's written entries; every stack store is within `STACK8`.
         unsafe {
+            // (o − b)·(−1/d) is (b − o)·(1/d) bit for bit (negation is
+            // exact), and lets each row load fold into the subtraction.
             let o = pre.o.map(|x| _mm256_set1_ps(x));
-            let inv = pre.inv.map(|x| _mm256_set1_ps(x));
-            let inv_far = pre.inv.map(|x| _mm256_set1_ps(x * FAR_SCALE));
+            let inv = pre.inv.map(|x| _mm256_set1_ps(-x));
+            let inv_far = pre.inv.map(|x| _mm256_set1_ps(-(x * FAR_SCALE)));
             let t_lo = _mm256_set1_ps(ray.t_min);
             let mut cur = 0u32;
             loop {
@@ -464,8 +464,8 @@ impl<const W: usize> Bvh<W> {
                         let f = _mm256_load_ps(base.add(far[a]));
                         // MAXPS/MINPS return the second operand when either is
                         // NaN (0·∞): the running bound stays in place.
-                        t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(n, o[a]), inv[a]), t0);
-                        t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(f, o[a]), inv_far[a]), t1);
+                        t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(o[a], n), inv[a]), t0);
+                        t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(o[a], f), inv_far[a]), t1);
                     }
                     let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1);
                     let mask = _mm256_movemask_ps(hit) as u32;
@@ -484,7 +484,8 @@ impl<const W: usize> Bvh<W> {
                             t = _mm256_permutevar8x32_ps(t0, rank);
                             c = _mm256_permutevar8x32_epi32(child, rank);
                         }
-                        let pick = _mm256_load_si256(COMPRESS[m as usize].as_ptr() as *const __m256i);
+                        let pick =
+                            _mm256_load_si256(COMPRESS[m as usize].as_ptr() as *const __m256i);
                         assert!(sp + 8 <= STACK8, "BVH traversal stack overflow");
                         _mm256_storeu_si256(
                             ids.add(sp) as *mut __m256i,
@@ -630,12 +631,7 @@ impl<const W: usize> Bvh<W> {
 /// Of the children of `node` in `mask`, return the nearest and defer the
 /// others (farthest pushed first, so they come back nearest first).
 #[inline(always)]
-fn descend<const W: usize>(
-    node: &Node<W>,
-    mask: u32,
-    t_near: &[f32; W],
-    stack: &mut Stack,
-) -> u32 {
+fn descend<const W: usize>(node: &Node<W>, mask: u32, t_near: &[f32; W], stack: &mut Stack) -> u32 {
     let first = mask.trailing_zeros() as usize;
     let rest = mask & (mask - 1);
     if rest == 0 {
@@ -1175,7 +1171,11 @@ mod tests {
     fn check<const W: usize>(boxes: &[Bounds3], bvh: &Bvh<W>, seed: u64) {
         let leaves: std::collections::HashMap<usize, Range<usize>> =
             bvh.leaves().map(|r| (r.start, r)).collect();
-        assert_eq!(leaves.len(), bvh.leaves().count(), "leaves share a first entry");
+        assert_eq!(
+            leaves.len(),
+            bvh.leaves().count(),
+            "leaves share a first entry"
+        );
         let mut ids = bvh.order.clone();
         ids.sort_unstable();
         assert_eq!(ids, (0..boxes.len() as u32).collect::<Vec<_>>());

@@ -571,8 +571,8 @@ impl Primitives {
         let entries: Vec<_> = (0..self.refs.len())
             .map(|i| {
                 let r = self.refs[i];
-                let is_tri = r != GAP
-                    && matches!(self.sources[r.child as usize], Source::Triangles);
+                let is_tri =
+                    r != GAP && matches!(self.sources[r.child as usize], Source::Triangles);
                 (self.tris[i], r, is_tri)
             })
             .collect();
@@ -682,13 +682,7 @@ impl Primitives {
     /// Any hit among the entries of the leaf starting at `first` (see
     /// [`Primitives::intersect_leaf`]), for the query `q` (made once per ray).
     #[inline(always)]
-    pub fn occluded_leaf(
-        &self,
-        ctx: &mut TraceCtx,
-        q: &AnyHit,
-        first: usize,
-        level: u32,
-    ) -> bool {
+    pub fn occluded_leaf(&self, ctx: &mut TraceCtx, q: &AnyHit, first: usize, level: u32) -> bool {
         let pre = q;
         let mut b = first / 4;
         loop {
@@ -975,7 +969,16 @@ mod tests {
                 &tris
                     .iter()
                     .enumerate()
-                    .map(|(i, &t)| (t, PrimRef { child: 0, prim: i as u32 }, true))
+                    .map(|(i, &t)| {
+                        (
+                            t,
+                            PrimRef {
+                                child: 0,
+                                prim: i as u32,
+                            },
+                            true,
+                        )
+                    })
                     .collect::<Vec<_>>(),
             );
             let shear = RayShear::new(o, d);

@@ -73,19 +73,14 @@ impl<R: Real> RayShear<R> {
     pub fn new(o: [R; 3], d: [R; 3]) -> Self {
         // Permute so that the ray's largest direction component is z.
         let ad = [d[0].abs(), d[1].abs(), d[2].abs()];
-        let kz = if ad[0] > ad[1] {
-            if ad[0] > ad[2] {
-                0
-            } else {
-                2
-            }
-        } else if ad[1] > ad[2] {
-            1
-        } else {
-            2
-        };
-        let kx = if kz == 2 { 0 } else { kz + 1 };
-        let ky = if kx == 2 { 0 } else { kx + 1 };
+        // Selects, not branches: an incoherent ray's dominant axis is a coin
+        // toss the branch predictor loses.
+        use std::hint::select_unpredictable as pick;
+        let x_over_y = ad[0] > ad[1];
+        let (k01, a01) = (pick(x_over_y, 0, 1), pick(x_over_y, ad[0], ad[1]));
+        let kz = pick(a01 > ad[2], k01, 2);
+        let kx = pick(kz == 2, 0, kz + 1);
+        let ky = pick(kx == 2, 0, kx + 1);
         let dp = [d[kx], d[ky], d[kz]];
         let flat = dp[2] == R::ZERO;
         RayShear {

@@ -1,8 +1,6 @@
 #![doc = include_str!("../README.md")]
 
-use rtk_kernel::accel::{
-    cull_bound, AnyHit, BuildParams, Bvh, Nearest, Primitives, Slot, Visit,
-};
+use rtk_kernel::accel::{cull_bound, AnyHit, BuildParams, Bvh, Nearest, Primitives, Slot, Visit};
 use rtk_kernel::geom::{overlaps, SlabRay, SphereRay};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
