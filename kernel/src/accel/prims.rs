@@ -683,11 +683,10 @@ impl Primitives {
     /// [`Primitives::intersect_leaf`]), for the query `q` (made once per ray).
     #[inline(always)]
     pub fn occluded_leaf(&self, ctx: &mut TraceCtx, q: &AnyHit, first: usize, level: u32) -> bool {
-        let pre = q;
         let mut b = first / 4;
         loop {
             let block = &self.blocks[b];
-            if self.occluded_block(ctx, &pre, b, block.entries as usize, level) {
+            if self.occluded_block(ctx, q, b, block.entries as usize, level) {
                 return true;
             }
             if block.last {
@@ -985,12 +984,12 @@ mod tests {
             let (t_min, t_max) = [(0.0, f32::INFINITY), (0.0, 1.5), (0.25, 2.0)][n % 3];
             let l = block.test(&ScreenRay::new(&shear), t_min, t_max);
             assert_eq!(l.hit & l.slow, 0);
-            for lane in 0..4 {
+            for (lane, &tri) in tris.iter().enumerate() {
                 if l.slow >> lane & 1 == 1 {
                     slow += 1;
                     continue;
                 }
-                let want = intersect_triangle_sheared(&shear, d, tris[lane], t_min, t_max);
+                let want = intersect_triangle_sheared(&shear, d, tri, t_min, t_max);
                 if l.hit >> lane & 1 == 1 {
                     hits += 1;
                     let h = want.unwrap_or_else(|| panic!("ray {n} lane {lane}: scalar misses"));
