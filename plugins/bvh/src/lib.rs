@@ -138,11 +138,12 @@ fn intersect_in<const W: usize>(
     hit: &mut Hit,
     level: u32,
 ) -> bool {
-    let mut q = Nearest::new(ray);
+    let mut q = None;
     let mut nodes = 0;
     let leaf = NearestLeaf {
         prims: &b.prims,
         ctx,
+        ray,
         q: &mut q,
         hit,
         level,
@@ -168,15 +169,17 @@ fn intersect_in<const W: usize>(
         ),
     }
     ctx.stats.node_tests += nodes;
-    q.found()
+    q.is_some_and(|q| q.found())
 }
 
 /// The leaf test of a nearest-hit query, compiled into the walk
-/// ([`Visit`]).
+/// ([`Visit`]). The query (the ray's shear for the triangle test) is made
+/// at the first leaf: a ray that reaches none never pays for it.
 struct NearestLeaf<'a> {
     prims: &'a Primitives,
     ctx: &'a mut TraceCtx,
-    q: &'a mut Nearest,
+    ray: &'a Ray,
+    q: &'a mut Option<Nearest>,
     hit: &'a mut Hit,
     level: u32,
 }
@@ -184,16 +187,19 @@ struct NearestLeaf<'a> {
 impl Visit for NearestLeaf<'_> {
     #[inline(always)]
     fn leaf(&mut self, first: usize) -> Option<f32> {
-        (self.prims).intersect_leaf(self.ctx, self.q, first, self.hit, self.level);
-        Some(cull_bound(self.q.ray.t_max))
+        let q = self.q.get_or_insert_with(|| Nearest::new(self.ray));
+        (self.prims).intersect_leaf(self.ctx, q, first, self.hit, self.level);
+        Some(cull_bound(q.ray.t_max))
     }
 }
 
-/// The leaf test of an any-hit query, compiled into the walk.
+/// The leaf test of an any-hit query, compiled into the walk; its query is
+/// made at the first leaf too.
 struct AnyLeaf<'a> {
     prims: &'a Primitives,
     ctx: &'a mut TraceCtx,
-    q: &'a AnyHit,
+    ray: &'a Ray,
+    q: Option<AnyHit>,
     found: &'a mut bool,
     level: u32,
 }
@@ -201,8 +207,9 @@ struct AnyLeaf<'a> {
 impl Visit for AnyLeaf<'_> {
     #[inline(always)]
     fn leaf(&mut self, first: usize) -> Option<f32> {
-        *self.found = (self.prims).occluded_leaf(self.ctx, self.q, first, self.level);
-        (!*self.found).then_some(self.q.t_max())
+        let q = self.q.get_or_insert_with(|| AnyHit::new(self.ray));
+        *self.found = (self.prims).occluded_leaf(self.ctx, q, first, self.level);
+        (!*self.found).then_some(self.ray.t_max)
     }
 }
 
@@ -217,12 +224,12 @@ fn occluded_in<const W: usize>(
 ) -> bool {
     let mut found = false;
     let mut nodes = 0;
-    let q = AnyHit::new(ray);
     // Any hit will do: no tie to keep, no margin.
     let leaf = AnyLeaf {
         prims: &b.prims,
         ctx,
-        q: &q,
+        ray,
+        q: None,
         found: &mut found,
         level,
     };
