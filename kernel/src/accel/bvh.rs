@@ -493,7 +493,22 @@ impl<const W: usize> Bvh<W> {
                         );
                         _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t, pick));
                         // Farthest first: the nearest is on top, taken now.
-                        sp += m.count_ones() as usize - 1;
+                        let deferred = m.count_ones() as usize - 1;
+                        // The others wait until the nearest's subtree is
+                        // done: fetch them meanwhile (an incoherent ray
+                        // spends most of its time waiting on memory).
+                        for i in sp..sp + deferred {
+                            let c = *ids.add(i);
+                            if c & LEAF != 0 {
+                                leaf.prefetch((c & !LEAF) as usize);
+                            } else {
+                                let p = self.node(c) as *const Node<W> as *const i8;
+                                for line in 0..std::mem::size_of::<Node<W>>() / 64 {
+                                    _mm_prefetch::<_MM_HINT_T0>(p.add(64 * line));
+                                }
+                            }
+                        }
+                        sp += deferred;
                         cur = *ids.add(sp);
                         continue;
                     }
@@ -680,6 +695,11 @@ fn descend<const W: usize>(node: &Node<W>, mask: u32, t_near: &[f32; W], stack: 
 pub trait Visit {
     /// Test the leaf starting at `first`.
     fn leaf(&mut self, first: usize) -> Option<f32>;
+
+    /// The leaf starting at `first` will likely be tested soon (it was
+    /// deferred on the stack): start fetching its data. Nothing by default.
+    #[inline(always)]
+    fn prefetch(&self, _first: usize) {}
 }
 
 impl<F: FnMut(usize) -> Option<f32>> Visit for F {

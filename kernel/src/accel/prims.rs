@@ -590,6 +590,22 @@ impl Primitives {
         }
     }
 
+    /// Start fetching the first block of the leaf starting at `first` (see
+    /// [`Visit::prefetch`](super::Visit::prefetch)).
+    #[inline(always)]
+    pub fn prefetch_leaf(&self, first: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(b) = self.blocks.get(first / 4) {
+            use std::arch::x86_64::*;
+            let p = b as *const Tri4 as *const i8;
+            for line in 0..std::mem::size_of::<Tri4>() / 64 {
+                // SAFETY: a prefetch never faults; the address is within
+                // the block anyway.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(64 * line)) };
+            }
+        }
+    }
+
     /// Nearest hit among the entries of the leaf starting at `first` (a
     /// table packed and marked: [`Primitives::mark_leaves`]): its blocks
     /// are read up to the one marked last, and nothing else.

@@ -191,6 +191,11 @@ impl Visit for NearestLeaf<'_> {
         (self.prims).intersect_leaf(self.ctx, q, first, self.hit, self.level);
         Some(cull_bound(q.ray.t_max))
     }
+
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        self.prims.prefetch_leaf(first);
+    }
 }
 
 /// The leaf test of an any-hit query, compiled into the walk; its query is
@@ -210,6 +215,11 @@ impl Visit for AnyLeaf<'_> {
         let q = self.q.get_or_insert_with(|| AnyHit::new(self.ray));
         *self.found = (self.prims).occluded_leaf(self.ctx, q, first, self.level);
         (!*self.found).then_some(self.ray.t_max)
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        self.prims.prefetch_leaf(first);
     }
 }
 
