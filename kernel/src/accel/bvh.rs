@@ -1,20 +1,29 @@
 //! The codebase's one BVH: a binned-SAH binary build collapsed into a
 //! W-wide tree (W = 4 or 8) whose nodes are tested W boxes at a time (SSE
 //! at 4, AVX2 at 8, chosen at run time by CPU feature detection, with a
-//! portable test the unit tests check against both), traversed nearest
-//! child first.
+//! portable test the unit tests check against both), near children first.
 //!
-//! What it takes from the public leaders: Embree's BVH4/BVH8 (four or eight
-//! children per node in structure-of-arrays layout, one SIMD slab test for
-//! all of them; the 8-wide test compiled into a whole AVX2 traversal, so the
-//! dispatch is one branch per ray, as tinybvh's BVH8_CPU does) and
-//! its binned SAH builder (Wald 2007, 16–32 bins on centroids); tinybvh and
-//! obvhs collapse a binary SAH tree into the wide one the same way (open the
-//! child with the largest surface area until W). Robustness is the
-//! kernel's own (`docs/numerics.md` rule 10): the far distance is widened by
-//! `1 + 2γ₃` (Ize 2013), and a NaN from `0 · ∞` (an origin on a slab plane,
-//! a zero direction component) leaves the previous bound in place, so a box
-//! is never culled by rounding.
+//! What it takes from the public leaders:
+//! - **Embree's BVH4/BVH8**: four or eight children per node in
+//!   structure-of-arrays layout, one SIMD slab test for all of them; its
+//!   binned SAH builder (Wald 2007, 16–32 bins on centroids), with a leaf's
+//!   cost counted in whole blocks of four ([`BuildParams::block`]), so
+//!   leaves fill the 4-wide triangle blocks they are tested in.
+//! - **tinybvh's BVH8_CPU** (after Fuetterling et al. 2017): the 8-wide test
+//!   compiled into a whole AVX2 traversal, so the dispatch is one branch per
+//!   ray; children ordered by a per-node permutation for the ray's octant
+//!   (`Node::perm`) and pushed with one compressed 8-wide store, instead of
+//!   sorted by distance; leaves of four triangles in one block.
+//! - **obvhs and tinybvh**: the collapse of a binary SAH tree into the wide
+//!   one (open the child with the largest surface area until W).
+//!
+//! What is rtk's own: the robustness (`docs/numerics.md` rule 10: the far
+//! distance widened by `1 + 2γ₄` — Ize 2013's `1 + 2γ₃`, plus the
+//! widening's own rounding, [`slab`](crate::geom::slab) — and a NaN from
+//! `0 · ∞`, an origin on a slab plane, leaving the previous bound in place,
+//! so a box is never culled by rounding); leaves named by their first entry,
+//! so a leaf visit reads the leaf's own block and nothing else; the
+//! deferred children prefetched while the nearest is walked ([`Visit`]).
 //!
 //! Depth is bounded by construction ([`MAX_DEPTH`]): a node that deep becomes
 //! a leaf however many primitives it holds, so the traversal stack, sized
@@ -212,6 +221,8 @@ impl<const W: usize> Bvh<W> {
             }
         }
         out.name_leaves();
+        out.nodes.shrink_to_fit();
+        out.leaves.shrink_to_fit();
         out.set_avx2(true);
         out
     }
@@ -990,9 +1001,12 @@ struct Precomp {
 }
 
 /// Widening of the far distance that makes the slab test conservative:
-/// `1 + 2γ₃` (γ as in [`gamma`](crate::geom::gamma), computed at compile time).
+/// `1 + 2γ₄` (γ as in [`gamma`](crate::geom::gamma), computed at compile
+/// time; why γ₄: [`slab`](crate::geom::slab)). The 8-wide walk folds it
+/// into the reciprocal (`(1/d)·s` once per ray): the same four roundings
+/// on the far side, in another order.
 const FAR_SCALE: f32 = {
-    let ne = 3.0 * (f32::EPSILON * 0.5);
+    let ne = 4.0 * (f32::EPSILON * 0.5);
     1.0 + 2.0 * (ne / (1.0 - ne))
 };
 
@@ -1284,8 +1298,8 @@ mod tests {
     }
 
     #[test]
-    fn the_far_scale_is_one_plus_two_gamma_3() {
-        assert_eq!(FAR_SCALE, 1.0 + 2.0 * crate::geom::gamma::<f32>(3));
+    fn the_far_scale_is_one_plus_two_gamma_4() {
+        assert_eq!(FAR_SCALE, 1.0 + 2.0 * crate::geom::gamma::<f32>(4));
     }
 
     #[test]

@@ -48,8 +48,11 @@ impl RayBoxPrecomp {
 
 /// The slab test in any precision: the overlap of `(t_min, t_max)` with the
 /// box `[lo, hi]` for the ray `origin + t d`, given `inv_dir = 1/d`.
-/// Conservative: the far distance is widened by `1 + 2γ₃` (Ize 2013,
-/// pbrt-v4). Slabs are ordered by the sign of the reciprocal (comparing the
+/// Conservative: the far distance is widened by `1 + 2γ₄` — Ize 2013
+/// (and pbrt-v4) give `1 + 2γ₃` for the three roundings of each distance,
+/// but the widening product rounds too: the far side then carries four
+/// roundings against the near side's three, and `(1 + γ₃)/(1 − γ₄)`
+/// exceeds `1 + 2γ₃` by about an ulp, while `1 + 2γ₄` covers it. Slabs are ordered by the sign of the reciprocal (comparing the
 /// two distances fails when one is `0·∞ = NaN`, an origin in the slab's
 /// plane), and the comparisons are written so a NaN keeps the previous bound.
 #[inline]
@@ -63,7 +66,7 @@ pub fn slab<R: Real>(
 ) -> Option<(R, R)> {
     let mut t0 = t_min;
     let mut t1 = t_max;
-    let widen = R::ONE + (R::ONE + R::ONE) * gamma::<R>(3);
+    let widen = R::ONE + (R::ONE + R::ONE) * gamma::<R>(4);
     for a in 0..3 {
         let mut tn = (lo[a] - origin[a]) * inv_dir[a];
         let mut tf = (hi[a] - origin[a]) * inv_dir[a];

@@ -32,7 +32,7 @@ struct Planes {
     origin: [f32; 3],
     dir: [f32; 3],
     inv_dir: [f32; 3],
-    /// Relative widening of a plane distance: 2γ₃, as the slab test's.
+    /// Relative widening of a plane distance: 2γ₄, as the slab test's.
     slack: f32,
 }
 
@@ -43,7 +43,7 @@ impl Planes {
             origin: ray.origin.to_array(),
             dir,
             inv_dir: dir.map(|d| 1.0 / d),
-            slack: 2.0 * gamma::<f32>(3),
+            slack: 2.0 * gamma::<f32>(4),
         }
     }
 
