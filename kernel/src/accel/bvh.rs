@@ -128,6 +128,8 @@ pub struct Bvh<const W: usize> {
     nodes: Vec<Node<W>>,
     /// Every leaf: its range of [`Bvh::order`] and the slot naming it.
     leaves: Vec<LeafInfo>,
+    /// The 8-wide walk's layout, when [`Bvh::interleave`] made one.
+    lines: Vec<Line>,
     /// Test nodes with AVX2 (W = 8 on a CPU that has it).
     avx2: bool,
     /// Leaf order: `order[k]` is the primitive stored `k`-th.
@@ -207,6 +209,7 @@ impl<const W: usize> Bvh<W> {
         let mut out = Bvh {
             nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
             leaves: Vec::with_capacity(nodes2.len() / 2 + 1),
+            lines: Vec::new(),
             avx2: false,
             order,
             root_leaf: None,
@@ -272,6 +275,7 @@ impl<const W: usize> Bvh<W> {
     /// Bytes held by the tree (nodes and leaf order).
     pub fn bytes(&self) -> usize {
         self.nodes.capacity() * std::mem::size_of::<Node<W>>()
+            + self.lines.capacity() * 64
             + self.leaves.capacity() * std::mem::size_of::<LeafInfo>()
             + self.order.capacity() * 4
     }
@@ -329,6 +333,54 @@ impl<const W: usize> Bvh<W> {
         self.nodes[at] = node;
     }
 
+    /// Lay the tree out for the 8-wide walk with each node followed by its
+    /// leaves' data, as tinybvh's BVH8_CPU does: `data(first)` gives the
+    /// lines of the leaf starting at `first` (in a final order: call after
+    /// [`Bvh::pad_leaves`]). A node and the leaves it names then share a
+    /// stretch of memory, and the hardware prefetcher that fetches one
+    /// fetches the other: on incoherent rays a leaf was a cache miss of its
+    /// own. The walk then hands leaves to [`Visit::leaf_lines`]. Only the
+    /// 8-wide AVX2 walk reads this layout; the others keep reading the nodes.
+    /// Returns whether it made one: a tree that is a single leaf has no
+    /// nodes to lay out, and its leaf is still handed to [`Visit::leaf`].
+    pub fn interleave<'a>(&mut self, data: impl Fn(usize) -> &'a [Line]) -> bool {
+        let node_lines = std::mem::size_of::<Node<W>>() / 64;
+        let mut lines: Vec<Line> = Vec::new();
+        if self.nodes.is_empty() {
+            self.lines = lines;
+            return false;
+        }
+        // (node, where its line offset goes: the parent's line and slot).
+        let mut todo: Vec<(u32, Option<(usize, usize)>)> = vec![(0, None)];
+        while let Some((n, parent)) = todo.pop() {
+            let at = lines.len();
+            assert!(
+                at < LEAF as usize,
+                "an interleaved BVH holds under 2^31 lines"
+            );
+            if let Some((p, slot)) = parent {
+                set_child::<W>(&mut lines, p, slot, at as u32);
+            }
+            let mut node = self.nodes[n as usize];
+            lines.resize(at + node_lines, Line([0; 64]));
+            for slot in 0..W {
+                let c = node.child[slot];
+                if c == EMPTY {
+                    continue;
+                }
+                if c & LEAF != 0 {
+                    node.child[slot] = LEAF | lines.len() as u32;
+                    lines.extend_from_slice(data((c & !LEAF) as usize));
+                } else {
+                    todo.push((c, Some((at, slot))));
+                }
+            }
+            write_node(&mut lines[at..at + node_lines], &node);
+        }
+        self.lines = lines;
+        true
+    }
+
     /// Visit the leaves `ray` may hit over `(t_min, t_max)`, near children
     /// first. `leaf(first)` tests a leaf's primitives and returns the
     /// narrowed `t_max`, or `None` to stop. A leaf is named by its first
@@ -349,7 +401,13 @@ impl<const W: usize> Bvh<W> {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only when the CPU has AVX2 (and W = 8).
-            return unsafe { self.walk8_avx2::<true>(ray, t_max, node_tests, leaf) };
+            return unsafe {
+                if self.lines.is_empty() {
+                    self.walk8_avx2::<true, false>(ray, t_max, node_tests, leaf)
+                } else {
+                    self.walk8_avx2::<true, true>(ray, t_max, node_tests, leaf)
+                }
+            };
         }
         let screen = |_, t, _| Some(t);
         self.walk::<false, false>(ray, t_max, node_tests, screen, leaf)
@@ -362,7 +420,13 @@ impl<const W: usize> Bvh<W> {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only when the CPU has AVX2 (and W = 8).
-            return unsafe { self.walk8_avx2::<false>(ray, t_max, node_tests, leaf) };
+            return unsafe {
+                if self.lines.is_empty() {
+                    self.walk8_avx2::<false, false>(ray, t_max, node_tests, leaf)
+                } else {
+                    self.walk8_avx2::<false, true>(ray, t_max, node_tests, leaf)
+                }
+            };
         }
         let screen = |_, t, _| Some(t);
         self.walk::<false, false>(ray, t_max, node_tests, screen, leaf)
@@ -422,7 +486,7 @@ impl<const W: usize> Bvh<W> {
     /// The CPU must have AVX2; `W` must be 8.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,popcnt,lzcnt")]
-    unsafe fn walk8_avx2<const ORDERED: bool>(
+    unsafe fn walk8_avx2<const ORDERED: bool, const LINES: bool>(
         &self,
         ray: &Ray,
         t_max: f32,
@@ -465,7 +529,11 @@ impl<const W: usize> Bvh<W> {
             let mut cur = 0u32;
             loop {
                 if cur & LEAF == 0 {
-                    let node = self.node(cur);
+                    let node = if LINES {
+                        self.node_at(cur)
+                    } else {
+                        self.node(cur)
+                    };
                     *node_tests += 1;
                     let base = node as *const Node<W> as *const f32;
                     let mut t0 = t_lo;
@@ -510,7 +578,14 @@ impl<const W: usize> Bvh<W> {
                         // spends most of its time waiting on memory).
                         for i in sp..sp + deferred {
                             let c = *ids.add(i);
-                            if c & LEAF != 0 {
+                            if LINES {
+                                // A node's first four lines, or a leaf's
+                                // first block (three) and what follows.
+                                let p = self.lines.as_ptr().add((c & !LEAF) as usize) as *const i8;
+                                for line in 0..4 {
+                                    _mm_prefetch::<_MM_HINT_T0>(p.add(64 * line));
+                                }
+                            } else if c & LEAF != 0 {
                                 leaf.prefetch((c & !LEAF) as usize);
                             } else {
                                 let p = self.node(c) as *const Node<W> as *const i8;
@@ -524,7 +599,13 @@ impl<const W: usize> Bvh<W> {
                         continue;
                     }
                 } else {
-                    match leaf.leaf((cur & !LEAF) as usize) {
+                    let at = (cur & !LEAF) as usize;
+                    let r = if LINES {
+                        leaf.leaf_lines(self.lines.get_unchecked(at..))
+                    } else {
+                        leaf.leaf(at)
+                    };
+                    match r {
                         Some(t) => t_max = t,
                         None => return,
                     }
@@ -643,6 +724,19 @@ impl<const W: usize> Bvh<W> {
         }
     }
 
+    /// The node at line `i` of the interleaved layout, without a bounds
+    /// check: every line offset the walk follows was written by
+    /// [`Bvh::interleave`] (a node's own, in its parent's slot).
+    #[inline(always)]
+    fn node_at(&self, i: u32) -> &Node<W> {
+        let node_lines = std::mem::size_of::<Node<W>>() / 64;
+        debug_assert!(i as usize + node_lines <= self.lines.len());
+        // SAFETY: as above, lines `i..i + node_lines` hold a node written by
+        // `write_node` (every field a plain number, so any bytes are valid),
+        // 64-byte aligned as `Node` is; the layout is immutable once made.
+        unsafe { &*(self.lines.as_ptr().add(i as usize) as *const Node<W>) }
+    }
+
     /// Node `i` of the traversal, without a bounds check: every index the
     /// walk follows was written by `collapse` (an inner slot's `child`),
     /// all below `nodes.len()`.
@@ -711,6 +805,42 @@ pub trait Visit {
     /// deferred on the stack): start fetching its data. Nothing by default.
     #[inline(always)]
     fn prefetch(&self, _first: usize) {}
+
+    /// Test the leaf whose data ([`Bvh::interleave`]'s `data`) starts
+    /// `lines` (which run on past it). Called instead of
+    /// [`Visit::leaf`] on an interleaved tree, whose caller provides it.
+    #[inline(always)]
+    fn leaf_lines(&mut self, _lines: &[Line]) -> Option<f32> {
+        unreachable!("an interleaved BVH is walked by a visitor of its lines")
+    }
+}
+
+/// A cache line of [`Bvh::interleave`]'s layout.
+#[repr(C, align(64))]
+#[derive(Clone, Copy)]
+pub struct Line(pub [u8; 64]);
+
+/// Node `node` as the bytes of its lines (`repr(C)`, no padding: its fields
+/// are arrays of 4-byte numbers, 32 · W bytes in all).
+fn write_node<const W: usize>(lines: &mut [Line], node: &Node<W>) {
+    let words = node
+        .lo
+        .iter()
+        .chain(&node.hi)
+        .flatten()
+        .map(|x| x.to_bits())
+        .chain(node.child)
+        .chain(node.perm);
+    for (k, w) in words.enumerate() {
+        lines[k / 16].0[4 * (k % 16)..4 * (k % 16) + 4].copy_from_slice(&w.to_ne_bytes());
+    }
+}
+
+/// Set slot `slot`'s child of the node at line `at` in a layout.
+fn set_child<const W: usize>(lines: &mut [Line], at: usize, slot: usize, child: u32) {
+    let k = std::mem::offset_of!(Node<W>, child) / 4 + slot;
+    let line = &mut lines[at + k / 16];
+    line.0[4 * (k % 16)..4 * (k % 16) + 4].copy_from_slice(&child.to_ne_bytes());
 }
 
 impl<F: FnMut(usize) -> Option<f32>> Visit for F {
@@ -1238,10 +1368,31 @@ mod tests {
                 })
                 .collect();
             let mut got = Vec::new();
-            bvh.traverse(&ray, f32::INFINITY, &mut 0, |first| {
-                got.extend(leaves[&first].clone().map(|k| bvh.order[k]));
-                Some(f32::INFINITY)
-            });
+            if bvh.lines.is_empty() {
+                bvh.traverse(&ray, f32::INFINITY, &mut 0, |first| {
+                    got.extend(leaves[&first].clone().map(|k| bvh.order[k]));
+                    Some(f32::INFINITY)
+                });
+            } else {
+                // Interleaved: each leaf's data is one line holding its
+                // first entry, read back from where the walk finds it.
+                struct Lines<'a>(&'a mut Vec<usize>);
+                impl Visit for Lines<'_> {
+                    fn leaf(&mut self, _: usize) -> Option<f32> {
+                        unreachable!("an interleaved tree hands over lines")
+                    }
+                    fn leaf_lines(&mut self, lines: &[Line]) -> Option<f32> {
+                        let first = u64::from_ne_bytes(lines[0].0[..8].try_into().unwrap());
+                        self.0.push(first as usize);
+                        Some(f32::INFINITY)
+                    }
+                }
+                let mut firsts = Vec::new();
+                bvh.traverse(&ray, f32::INFINITY, &mut 0, Lines(&mut firsts));
+                for first in firsts {
+                    got.extend(leaves[&first].clone().map(|k| bvh.order[k]));
+                }
+            }
             got.sort_unstable();
             for w in want {
                 assert!(got.binary_search(&w).is_ok(), "box {w} skipped by ray {k}");
@@ -1261,6 +1412,20 @@ mod tests {
             check(&boxes, &bvh, seed + 100);
             bvh.set_avx2(false);
             check(&boxes, &bvh, seed + 100);
+            // Interleaved with its leaves' data (the AVX2 walk's layout).
+            if Bvh8::simd_available() && n > 1 {
+                bvh.set_avx2(true);
+                let data: std::collections::HashMap<usize, [Line; 1]> = bvh
+                    .leaves()
+                    .map(|r| {
+                        let mut line = Line([0; 64]);
+                        line.0[..8].copy_from_slice(&(r.start as u64).to_ne_bytes());
+                        (r.start, [line])
+                    })
+                    .collect();
+                assert!(bvh.interleave(|first| &data[&first]));
+                check(&boxes, &bvh, seed + 100);
+            }
         }
     }
 

@@ -17,6 +17,8 @@ use crate::abi::*;
 use crate::geom::{intersect_triangle_sheared, is_degenerate, RayShear};
 use crate::sdk::{Child, PluginError, PrimSet};
 
+use super::Line;
+
 /// The `prim` of an entry that stands for a whole child.
 pub const WHOLE: u32 = u32::MAX;
 
@@ -116,9 +118,15 @@ struct Tri4 {
     lanes: u32,
     /// Entries that are not gaps (they come first).
     entries: u32,
-    /// A leaf ends with this block ([`Primitives::mark_leaves`]).
-    last: bool,
+    /// 1: a leaf ends with this block ([`Primitives::mark_leaves`]).
+    last: u32,
+    /// No implicit padding: every byte is initialised, so a block can be
+    /// copied as cache lines ([`Primitives::leaf_lines`]).
+    _pad: [u32; 1],
 }
+
+/// Three lines, no padding: the layout [`Primitives::leaf_lines`] relies on.
+const _: () = assert!(std::mem::size_of::<Tri4>() == 192 && std::mem::align_of::<Tri4>() == 64);
 
 /// What the 4-wide screen needs of a ray, computed once per query: the
 /// sheared space's axes as row offsets, and the origin and shear in that
@@ -166,7 +174,8 @@ impl Tri4 {
             refs,
             lanes: if packed { lanes } else { 0 },
             entries: refs.iter().filter(|&&r| r != GAP).count() as u32,
-            last: false,
+            last: 0,
+            _pad: [0],
         }
     }
 
@@ -502,14 +511,32 @@ impl Primitives {
         hit: &mut Hit,
         level: u32,
     ) {
+        let entries = ids.map(|i| (self.refs[i], i));
+        let entries = entries.map(|(r, i)| match self.sources[r.child as usize] {
+            Source::Triangles => (r, self.vertices(i)),
+            _ => (r, [[0.0; 3]; 3]),
+        });
+        self.intersect_entries(ctx, q, entries, hit, level)
+    }
+
+    /// [`Primitives::intersect_ids`] over entries given as their reference
+    /// and, for a triangle, its vertices.
+    #[inline]
+    fn intersect_entries(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &mut Nearest,
+        entries: impl Iterator<Item = (PrimRef, [[f32; 3]; 3])>,
+        hit: &mut Hit,
+        level: u32,
+    ) {
         let d = q.ray.dir.to_array();
         let mut tests = 0u64;
         let mut run = Run::default();
-        for i in ids {
+        for (r, v) in entries {
             tests += 1;
-            let r = self.refs[i];
             match self.sources[r.child as usize] {
-                Source::Triangles => self.triangle(q, d, r, self.vertices(i), hit, level),
+                Source::Triangles => self.triangle(q, d, r, v, hit, level),
                 Source::Set(_) => {
                     if !run.push(r) {
                         self.flush(ctx, q, &mut run, hit, level);
@@ -586,7 +613,7 @@ impl Primitives {
     pub fn mark_leaves(&mut self, leaves: impl Iterator<Item = std::ops::Range<usize>>) {
         for r in leaves.filter(|r| !r.is_empty()) {
             debug_assert!(r.start.is_multiple_of(4), "leaves start blocks");
-            self.blocks[(r.end - 1) / 4].last = true;
+            self.blocks[(r.end - 1) / 4].last = 1;
         }
     }
 
@@ -618,15 +645,79 @@ impl Primitives {
         hit: &mut Hit,
         level: u32,
     ) {
-        let mut b = first / 4;
-        loop {
-            let block = &self.blocks[b];
-            self.intersect_block(ctx, q, b, block.entries as usize, hit, level);
-            if block.last {
+        self.intersect_blocks(ctx, q, &self.blocks[first / 4..], hit, level);
+    }
+
+    /// Nearest hit among the entries of the leaf whose blocks start
+    /// `blocks` (up to the one marked last).
+    #[inline(always)]
+    fn intersect_blocks(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &mut Nearest,
+        blocks: &[Tri4],
+        hit: &mut Hit,
+        level: u32,
+    ) {
+        for block in blocks {
+            self.intersect_block(ctx, q, block, block.entries as usize, hit, level);
+            if block.last != 0 {
                 return;
             }
-            b += 1;
         }
+    }
+
+    /// The lines of the leaf starting at `first`, its blocks up to the one
+    /// marked last ([`Primitives::mark_leaves`]): to be copied next to the
+    /// node that names the leaf ([`Bvh::interleave`](super::Bvh::interleave)),
+    /// and read back by [`Primitives::intersect_lines`].
+    pub fn leaf_lines(&self, first: usize) -> &[Line] {
+        let b = first / 4;
+        let n = self.blocks[b..]
+            .iter()
+            .position(|k| k.last != 0)
+            .map_or(self.blocks.len() - b, |i| i + 1);
+        let blocks = &self.blocks[b..b + n];
+        // SAFETY: `Tri4` is `repr(C)`, 64-byte aligned, three lines long
+        // and has no padding (checked at compile time above): its bytes are
+        // all initialised, and a `Line` is any 64 bytes at 64-byte alignment.
+        unsafe { std::slice::from_raw_parts(blocks.as_ptr() as *const Line, 3 * n) }
+    }
+
+    /// Free the blocks once a structure holds its own copy of every leaf's
+    /// lines ([`Bvh::interleave`](super::Bvh::interleave)): the leaf data
+    /// is not kept twice. Only [`Primitives::intersect_lines`] and
+    /// [`Primitives::occluded_lines`] answer afterwards; the queries by
+    /// entry index panic.
+    pub fn drop_blocks(&mut self) {
+        self.blocks = Vec::new();
+    }
+
+    /// [`Primitives::intersect_leaf`] over a leaf's lines as
+    /// [`Primitives::leaf_lines`] gave them (copied next to its node).
+    #[inline(always)]
+    pub fn intersect_lines(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &mut Nearest,
+        lines: &[Line],
+        hit: &mut Hit,
+        level: u32,
+    ) {
+        self.intersect_blocks(ctx, q, blocks_of(lines), hit, level);
+    }
+
+    /// [`Primitives::occluded_leaf`] over a leaf's lines (see
+    /// [`Primitives::intersect_lines`]).
+    #[inline(always)]
+    pub fn occluded_lines(
+        &self,
+        ctx: &mut TraceCtx,
+        q: &AnyHit,
+        lines: &[Line],
+        level: u32,
+    ) -> bool {
+        self.occluded_blocks(ctx, q, blocks_of(lines), level)
     }
 
     /// Nearest hit among the entries of `range` (a leaf of a structure that
@@ -642,27 +733,26 @@ impl Primitives {
     ) {
         for b in range.start / 4..range.end.div_ceil(4) {
             let n = (range.end - 4 * b).min(4);
-            self.intersect_block(ctx, q, b, n, hit, level);
+            self.intersect_block(ctx, q, &self.blocks[b], n, hit, level);
         }
     }
 
-    /// The first `n` entries of block `b`: a packed block's triangles are
-    /// screened four at a time (the same arithmetic per lane as the scalar
-    /// test, so no hit is lost) and only the survivors take the exact
-    /// test; another block is queried entry by entry.
+    /// The first `n` entries of `block`: a packed block's triangles are
+    /// tested four at a time and only the lanes that test cannot decide take
+    /// the scalar test; another block is queried entry by entry.
     #[inline(always)]
     fn intersect_block(
         &self,
         ctx: &mut TraceCtx,
         q: &mut Nearest,
-        b: usize,
+        block: &Tri4,
         n: usize,
         hit: &mut Hit,
         level: u32,
     ) {
-        let block = &self.blocks[b];
         if block.lanes == 0 {
-            return self.intersect_ids(ctx, q, 4 * b..4 * b + n, hit, level);
+            let entries = (0..n).map(|lane| (block.refs[lane], block.tri(lane)));
+            return self.intersect_entries(ctx, q, entries, hit, level);
         }
         ctx.stats.prim_tests += n as u64;
         // Test with the loosest limit a tie could need; each hit is then
@@ -699,17 +789,21 @@ impl Primitives {
     /// [`Primitives::intersect_leaf`]), for the query `q` (made once per ray).
     #[inline(always)]
     pub fn occluded_leaf(&self, ctx: &mut TraceCtx, q: &AnyHit, first: usize, level: u32) -> bool {
-        let mut b = first / 4;
-        loop {
-            let block = &self.blocks[b];
-            if self.occluded_block(ctx, q, b, block.entries as usize, level) {
+        self.occluded_blocks(ctx, q, &self.blocks[first / 4..], level)
+    }
+
+    /// Any hit among the entries of the leaf whose blocks start `blocks`.
+    #[inline(always)]
+    fn occluded_blocks(&self, ctx: &mut TraceCtx, q: &AnyHit, blocks: &[Tri4], level: u32) -> bool {
+        for block in blocks {
+            if self.occluded_block(ctx, q, block, block.entries as usize, level) {
                 return true;
             }
-            if block.last {
+            if block.last != 0 {
                 return false;
             }
-            b += 1;
         }
+        false
     }
 
     /// Any hit among the entries of `range` (see [`Primitives::intersect_range`]).
@@ -722,24 +816,31 @@ impl Primitives {
         level: u32,
     ) -> bool {
         let pre = AnyHit::new(ray);
-        (range.start / 4..range.end.div_ceil(4))
-            .any(|b| self.occluded_block(ctx, &pre, b, (range.end - 4 * b).min(4), level))
+        (range.start / 4..range.end.div_ceil(4)).any(|b| {
+            self.occluded_block(
+                ctx,
+                &pre,
+                &self.blocks[b],
+                (range.end - 4 * b).min(4),
+                level,
+            )
+        })
     }
 
-    /// Any hit among the first `n` entries of block `b`.
+    /// Any hit among the first `n` entries of `block`.
     #[inline(always)]
     fn occluded_block(
         &self,
         ctx: &mut TraceCtx,
         pre: &AnyHit,
-        b: usize,
+        block: &Tri4,
         n: usize,
         level: u32,
     ) -> bool {
-        let block = &self.blocks[b];
         let ray = &pre.ray;
         if block.lanes == 0 {
-            return self.occluded_ids(ctx, ray, 4 * b..4 * b + n, level);
+            let entries = (0..n).map(|lane| (block.refs[lane], block.tri(lane)));
+            return self.occluded_entries(ctx, ray, entries, level);
         }
         ctx.stats.prim_tests += n as u64;
         let valid = block.lanes & ((1 << n) - 1);
@@ -818,17 +919,33 @@ impl Primitives {
         ids: impl Iterator<Item = usize>,
         level: u32,
     ) -> bool {
+        let entries = ids.map(|i| (self.refs[i], i));
+        let entries = entries.map(|(r, i)| match self.sources[r.child as usize] {
+            Source::Triangles => (r, self.vertices(i)),
+            _ => (r, [[0.0; 3]; 3]),
+        });
+        self.occluded_entries(ctx, ray, entries, level)
+    }
+
+    /// [`Primitives::occluded_ids`] over entries given as their reference
+    /// and, for a triangle, its vertices.
+    #[inline]
+    fn occluded_entries(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        entries: impl Iterator<Item = (PrimRef, [[f32; 3]; 3])>,
+        level: u32,
+    ) -> bool {
         let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
         let shear = RayShear::new(o, d);
         let mut tests = 0u64;
         let mut found = false;
-        for i in ids {
+        for (r, v) in entries {
             tests += 1;
-            let r = self.refs[i];
             found = match self.sources[r.child as usize] {
                 Source::Triangles => {
-                    intersect_triangle_sheared(&shear, d, self.vertices(i), ray.t_min, ray.t_max)
-                        .is_some()
+                    intersect_triangle_sheared(&shear, d, v, ray.t_min, ray.t_max).is_some()
                 }
                 Source::Set(set) => set.occluded(ctx, ray, &[r.prim], level + 1),
                 Source::Whole => self.children[r.child as usize].occluded(ctx, ray, level + 1),
@@ -855,6 +972,18 @@ impl Primitives {
         let c = hit.entry(level).index as usize;
         self.children[c].local_geom(ctx, ray, hit, level + 1, mask, out);
     }
+}
+
+/// The blocks a leaf's lines hold ([`Primitives::leaf_lines`]): `lines`
+/// starts at the leaf and may run past it.
+#[inline(always)]
+fn blocks_of(lines: &[Line]) -> &[Tri4] {
+    // SAFETY: a `Line` is 64-byte aligned as `Tri4` is, and every field of
+    // `Tri4` is a plain number (f32, u32), so any bytes are a valid block.
+    // A leaf's lines start with its blocks (copied by
+    // `Primitives::leaf_lines`); readers stop at the one marked last, before
+    // whatever follows in the slice.
+    unsafe { std::slice::from_raw_parts(lines.as_ptr() as *const Tri4, lines.len() / 3) }
 }
 
 /// An any-hit query: the ray and what the triangle tests need of it,
