@@ -414,7 +414,9 @@ impl<const W: usize> Bvh<W> {
     }
 
     /// [`traverse`](Self::traverse) for any-hit queries, which stop at the
-    /// first hit: the children are visited in slot order, with no ranking.
+    /// first hit: the children are visited in slot order, with no ranking,
+    /// and deferred ones are not culled by a `t_max` a leaf narrowed (an
+    /// any-hit leaf returns it unchanged, or stops the walk).
     #[inline]
     pub fn traverse_any(&self, ray: &Ray, t_max: f32, node_tests: &mut u64, leaf: impl Visit) {
         #[cfg(target_arch = "x86_64")]
@@ -570,7 +572,11 @@ impl<const W: usize> Bvh<W> {
                             ids.add(sp) as *mut __m256i,
                             _mm256_permutevar8x32_epi32(c, pick),
                         );
-                        _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t, pick));
+                        if ORDERED {
+                            // An any-hit query's t_max never narrows: every
+                            // deferred child stays in range, no distance kept.
+                            _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t, pick));
+                        }
                         // Farthest first: the nearest is on top, taken now.
                         let deferred = m.count_ones() as usize - 1;
                         // The others wait until the nearest's subtree is
@@ -616,7 +622,7 @@ impl<const W: usize> Bvh<W> {
                         return;
                     }
                     sp -= 1;
-                    if *dists.add(sp) <= t_max {
+                    if !ORDERED || *dists.add(sp) <= t_max {
                         cur = *ids.add(sp);
                         break;
                     }
