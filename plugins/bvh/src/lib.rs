@@ -267,9 +267,7 @@ fn occluded_in<const W: usize>(
         level,
     };
     match &b.volumes {
-        // Ranked front to back like a nearest-hit query: the nearest
-        // occluder is met sooner (2 % fewer node visits on the dragon).
-        Volumes::None => bvh.traverse(ray, ray.t_max, &mut nodes, leaf),
+        Volumes::None => bvh.traverse_any(ray, ray.t_max, &mut nodes, leaf),
         Volumes::Spheres(v) => bvh.traverse_screened(
             ray,
             ray.t_max,
