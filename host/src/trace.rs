@@ -59,11 +59,17 @@ pub enum RaySet {
 
 /// Rays per task: as the Embree anchor splits its work.
 const CHUNK: usize = 4096;
+/// Most timed passes `--iters` may ask for: a benchmark's median needs a
+/// handful, and a typo of a few more digits should not run for days.
+const MAX_ITERS: u32 = 1000;
 
 /// Run `rtk trace`.
 pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> Result<()> {
     if a.iters == 0 {
         bail!("--iters must be at least 1 (the timed passes over the rays)");
+    }
+    if a.iters > MAX_ITERS {
+        bail!("--iters must be at most {MAX_ITERS}, got {}", a.iters);
     }
     let rss0 = resident_bytes();
     let t_build = Instant::now();

@@ -500,6 +500,8 @@ fn file_cases() -> Vec<Case> {
         with_key(mesh("obj_not_a_number", "n.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 abc\nf 1 2 3\n", &["n.obj: line 3: `abc` is not a number"])),
         with_key(mesh("obj_vertex_of_two_numbers", "v.obj", b"v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", &["v.obj: line 1: a vertex needs 3 numbers, found 2"])),
         with_key(mesh("obj_no_triangles", "e.obj", b"# nothing\nv 0 0 0\n", &["e.obj: the mesh has no triangles"])),
+        scene("trace_iters_beyond_the_limit", GOOD, &["--iters must be at most 1000, got 100000"]).command(&["trace", "{dir}/tri.obj", "--rayset", "primary", "--iters", "100000"]),
+        edit("raycls_negative_max_candidates", "class = \"list\"", "class = \"raycls\"\nmax_candidates = -1", &["scene.toml:", "objects.world: key `max_candidates`", "must be between 1 and 1048576"]).refuse(&["4294967295"]),
         scene("trace_rays_from_a_fifo", GOOD, &["rays.bin: cannot read the ray file: it is a FIFO, not a regular file"]).with(Extra::Fifo("rays.bin")).command(&["trace", "{dir}/tri.obj", "--rays", "{dir}/rays.bin"]),
         scene("trace_rays_from_dev_zero", GOOD, &["/dev/zero: cannot read the ray file: it is a device"]).command(&["trace", "{dir}/tri.obj", "--rays", "/dev/zero"]),
         scene("trace_iters_zero", GOOD, &["--iters must be at least 1"]).command(&["trace", "{dir}/tri.obj", "--rayset", "primary", "--iters", "0"]),

@@ -11,25 +11,27 @@ use rtk_kernel::*;
 #[derive(Deserialize)]
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
+    // Signed, so a negative value meets the range check below and its
+    // message, not the integer type's "0 to 4294967295".
     #[serde(default = "default_candidates")]
-    max_candidates: u32,
+    max_candidates: i64,
     #[serde(default = "default_depth")]
-    max_depth: u32,
+    max_depth: i64,
     #[serde(default = "default_visits")]
-    min_visits: u32,
+    min_visits: i64,
     #[serde(default = "default_memory")]
     max_memory_mb: f64,
     #[serde(default)]
     stats: bool,
 }
 
-fn default_candidates() -> u32 {
+fn default_candidates() -> i64 {
     8
 }
-fn default_depth() -> u32 {
+fn default_depth() -> i64 {
     48
 }
-fn default_visits() -> u32 {
+fn default_visits() -> i64 {
     2
 }
 fn default_memory() -> f64 {
@@ -86,7 +88,7 @@ impl Plugin for RayCls {
                 "must be between 1 and 1048576",
             ));
         }
-        if p.max_depth > MAX_DEPTH {
+        if !(0..=MAX_DEPTH as i64).contains(&p.max_depth) {
             return Err(PluginError::key(
                 "max_depth",
                 format!("must be between 0 and {MAX_DEPTH}"),
@@ -108,8 +110,8 @@ impl Plugin for RayCls {
             children: Vec::new(),
             limits: Limits {
                 max_cands: p.max_candidates as usize,
-                max_depth: p.max_depth,
-                min_visits: p.min_visits,
+                max_depth: p.max_depth as u32,
+                min_visits: p.min_visits as u32,
                 budget_bytes: (p.max_memory_mb * 1_048_576.0) as u64,
             },
             stats: p.stats,

@@ -57,8 +57,11 @@ impl PluginPath {
             names.sort();
             for n in names {
                 if let Some(class) = n.strip_prefix(&pre).and_then(|r| r.strip_suffix(suf)) {
-                    if is_identifier(class) {
-                        out.entry(class.to_string()).or_insert_with(|| d.join(&n));
+                    // Only files (through symlinks) are libraries: a FIFO or
+                    // a folder of that name is no class.
+                    let file = d.join(&n);
+                    if is_identifier(class) && std::fs::metadata(&file).is_ok_and(|m| m.is_file()) {
+                        out.entry(class.to_string()).or_insert(file);
                     }
                 }
             }
@@ -94,5 +97,39 @@ impl PluginPath {
             }
         }
         out
+    }
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    /// A FIFO or a folder named like a plugin is no class: listing it
+    /// would send `rtk plugins` to load it (a FIFO would hang `dlopen`).
+    #[test]
+    fn only_files_are_classes() {
+        let dir = std::env::temp_dir().join(format!("rtk-path-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let name = |c: &str| {
+            format!(
+                "{}rtk_{c}{}",
+                std::env::consts::DLL_PREFIX,
+                std::env::consts::DLL_SUFFIX
+            )
+        };
+        std::fs::write(dir.join(name("real")), b"not really a library").unwrap();
+        std::fs::create_dir_all(dir.join(name("folder"))).unwrap();
+        let fifo = dir.join(name("pipe"));
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success());
+        let path = PluginPath {
+            dirs: vec![dir.clone()],
+        };
+        let classes: Vec<String> = path.available().into_keys().collect();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(classes, ["real"]);
+        assert!(made, "mkfifo is needed for this test");
     }
 }
