@@ -37,7 +37,7 @@ pub struct TraceArgs {
     /// Write the rays traced to FILE (a ray file).
     #[arg(long = "save-rays", value_name = "FILE")]
     pub save_rays: Option<PathBuf>,
-    /// Timed passes over the rays (the median is reported).
+    /// Timed passes over the rays, 1 to 1000 (the median is reported).
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub iters: u32,
     /// Print the report as JSON.
