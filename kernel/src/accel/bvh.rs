@@ -500,13 +500,7 @@ impl<const W: usize> Bvh<W> {
     ) {
         use std::arch::x86_64::*;
         debug_assert!(W == 8);
-        if let Some(r) = &self.root_leaf {
-            if !r.is_empty() {
-                leaf.leaf(r.start as usize);
-            }
-            return;
-        }
-        if self.nodes.is_empty() {
+        if self.no_nodes(&mut leaf) {
             return;
         }
         let pre = Precomp::new(ray);
@@ -670,13 +664,7 @@ impl<const W: usize> Bvh<W> {
         mut screen: impl FnMut(usize, f32, f32) -> Option<f32>,
         mut leaf: impl Visit,
     ) {
-        if let Some(r) = &self.root_leaf {
-            if !r.is_empty() {
-                leaf.leaf(r.start as usize);
-            }
-            return;
-        }
-        if self.nodes.is_empty() {
+        if self.no_nodes(&mut leaf) {
             return;
         }
         let pre = Precomp::new(ray);
@@ -722,6 +710,19 @@ impl<const W: usize> Bvh<W> {
                 }
             }
         }
+    }
+
+    /// A tree without nodes, walked: its one leaf (if it holds anything)
+    /// is visited. Returns whether the tree has no nodes, so the walk is done.
+    #[inline(always)]
+    fn no_nodes(&self, leaf: &mut impl Visit) -> bool {
+        if let Some(r) = &self.root_leaf {
+            if !r.is_empty() {
+                leaf.leaf(r.start as usize);
+            }
+            return true;
+        }
+        self.nodes.is_empty()
     }
 
     /// Write each leaf's name (`LEAF | first`) into its slot, once the
