@@ -421,6 +421,13 @@ impl Primitives {
         Ok(Gathered { prims: p, boxes })
     }
 
+    /// Every entry is a triangle (the children all lend theirs): a leaf
+    /// then costs its 4-wide blocks, whatever its size, and a structure may
+    /// choose larger leaves than over entries queried one call each.
+    pub fn all_triangles(&self) -> bool {
+        self.sources.iter().all(|s| matches!(s, Source::Triangles))
+    }
+
     /// Number of primitives.
     pub fn len(&self) -> usize {
         self.refs.len()
