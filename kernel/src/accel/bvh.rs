@@ -167,6 +167,7 @@ impl Node2 {
     }
 }
 
+#[derive(Clone, Copy)]
 enum Kind2 {
     Leaf(u32, u32),
     Inner(u32, u32),
@@ -206,8 +207,23 @@ impl<const W: usize> Bvh<W> {
         self.avx2 = on && W == 8 && Self::simd_available();
     }
 
-    /// Build over `boxes` (one per primitive; empty boxes are never hit).
+    /// Build over `boxes` (one per primitive; empty boxes are never hit),
+    /// on this thread.
     pub fn build(boxes: &[Bounds3], params: BuildParams) -> Self {
+        Self::build_on(boxes, params, &|n, f| (0..n).for_each(f))
+    }
+
+    /// [`Bvh::build`] with the subtrees below the top few levels built in
+    /// parallel: `par(n, f)` runs `f(i)` for every `i < n`, on any threads
+    /// (a plugin passes the host's pool, `Prepare::parallel_for`). The
+    /// tree is the same whatever runs the tasks: each subtree is built
+    /// alone, and they are joined in a fixed order.
+    ///
+    /// Why the top stays on one thread: its few large nodes would each
+    /// need their binning split across threads; below it, whole subtrees
+    /// are independent tasks. On two threads this leaves about a third of
+    /// the work serial (BENCHMARKS.md).
+    pub fn build_on(boxes: &[Bounds3], params: BuildParams, par: &Parallel<'_>) -> Self {
         assert!(W == 4 || W == 8, "a BVH is 4 or 8 wide");
         let centroids: Vec<Vec3> = boxes
             .iter()
@@ -220,8 +236,18 @@ impl<const W: usize> Bvh<W> {
             params,
             nodes: Vec::with_capacity(2 * boxes.len() / params.max_leaf.max(1) + 1),
             depth: 0,
+            // Subtrees of at most 1/32 of the primitives (and at least
+            // `MIN_TASK`) are left as tasks: enough of them to balance two
+            // threads or a few more. A small build runs on its own.
+            task_size: if boxes.len() >= 2 * MIN_TASK {
+                (boxes.len() / 32).max(MIN_TASK)
+            } else {
+                0
+            },
+            tasks: Vec::new(),
         };
         let root = b.node(&mut order, 0, 1);
+        b.run_tasks(&mut order, par);
         let bounds = b.nodes[root as usize].bounds;
         let depth = b.depth;
         let nodes2 = b.nodes;
@@ -1198,7 +1224,21 @@ struct Builder<'a> {
     params: BuildParams,
     nodes: Vec<Node2>,
     depth: usize,
+    /// A node of at most this many primitives (and not the root) is left
+    /// to be built as a task of its own ([`Builder::run_tasks`]); 0: none.
+    task_size: usize,
+    /// The nodes left so: (node, first, count, level).
+    tasks: Vec<(u32, usize, usize, usize)>,
 }
+
+/// Runs `f(i)` for every `i < n`, on any threads ([`Bvh::build_on`]).
+pub type Parallel<'a> = dyn Fn(u64, &(dyn Fn(u64) + Sync)) + 'a;
+
+/// A subtree built by a task: its nodes (its root first) and depth.
+type Subtree = (Vec<Node2>, usize);
+
+/// The smallest subtree worth a task of its own.
+const MIN_TASK: usize = 4096;
 
 /// The best split of a node found by the SAH sweep.
 struct Split {
@@ -1209,8 +1249,86 @@ struct Split {
 }
 
 impl Builder<'_> {
+    /// Build the subtrees left as tasks, in parallel on `par`, each by a
+    /// builder of its own over its own part of `order`, and join them in
+    /// task order: the tree is the one a serial build makes.
+    fn run_tasks(&mut self, order: &mut [u32], par: &Parallel<'_>) {
+        use std::sync::Mutex;
+        let tasks = std::mem::take(&mut self.tasks);
+        if tasks.is_empty() {
+            return;
+        }
+        // Each task's part of the order (they are disjoint, in order).
+        let mut parts = Vec::with_capacity(tasks.len());
+        let (mut rest, mut at) = (order, 0);
+        for &(_, first, count, _) in &tasks {
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(first - at);
+            let (part, tail) = tail.split_at_mut(count);
+            parts.push(Mutex::new(part));
+            (rest, at) = (tail, first + count);
+        }
+        let built: Vec<Mutex<Option<Subtree>>> = tasks.iter().map(|_| Mutex::new(None)).collect();
+        let (boxes, centroids, params) = (self.boxes, self.centroids, self.params);
+        par(tasks.len() as u64, &|i| {
+            let i = i as usize;
+            let (_, first, _, level) = tasks[i];
+            let mut part = parts[i].lock().unwrap_or_else(|e| e.into_inner());
+            let mut b = Builder {
+                boxes,
+                centroids,
+                params,
+                nodes: Vec::new(),
+                depth: 0,
+                // A task builds its whole subtree itself.
+                task_size: 0,
+                tasks: Vec::new(),
+            };
+            b.node(&mut part, first, level);
+            *built[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((b.nodes, b.depth));
+        });
+        for (&(at, ..), out) in tasks.iter().zip(built) {
+            let (nodes, depth) = out
+                .into_inner()
+                .unwrap_or_else(|e| e.into_inner())
+                .expect("every task ran");
+            self.depth = self.depth.max(depth);
+            // The task's root takes the placeholder's place; the rest follow
+            // the nodes so far, their links moved by the same offset.
+            let shift = |k: u32| {
+                if k == 0 {
+                    at
+                } else {
+                    k + self.nodes.len() as u32 - 1
+                }
+            };
+            let moved = |n: &Node2| Node2 {
+                bounds: n.bounds,
+                kind: match n.kind {
+                    Kind2::Inner(a, b) => Kind2::Inner(shift(a), shift(b)),
+                    leaf @ Kind2::Leaf(..) => leaf,
+                },
+                leaf_ok: n.leaf_ok,
+            };
+            let root = moved(&nodes[0]);
+            let rest: Vec<Node2> = nodes[1..].iter().map(moved).collect();
+            self.nodes[at as usize] = root;
+            self.nodes.extend(rest);
+        }
+    }
+
     /// Build the node over `ids` (at `first` in the order) at `level`.
     fn node(&mut self, ids: &mut [u32], first: usize, level: usize) -> u32 {
+        if ids.len() <= self.task_size && level > 1 && !ids.is_empty() {
+            // Built later, as a task ([`Builder::run_tasks`]).
+            let me = self.nodes.len() as u32;
+            self.nodes.push(Node2 {
+                bounds: Bounds3::EMPTY,
+                kind: Kind2::Leaf(first as u32, ids.len() as u32),
+                leaf_ok: None,
+            });
+            self.tasks.push((me, first, ids.len(), level));
+            return me;
+        }
         self.depth = self.depth.max(level);
         let bounds = ids
             .iter()
@@ -1667,6 +1785,30 @@ mod tests {
         assert!(bvh.depth <= MAX_DEPTH, "{}", bvh.depth);
         check(&boxes, &bvh, 9);
         check(&boxes, &Bvh8::build(&boxes, BuildParams::default()), 9);
+    }
+
+    #[test]
+    fn a_parallel_build_makes_the_serial_build_s_tree() {
+        // Enough boxes for tasks; the tasks run on two threads, last first.
+        let boxes = random_boxes(40_000, 11);
+        let par = |n: u64, f: &(dyn Fn(u64) + Sync)| {
+            std::thread::scope(|s| {
+                for half in [1, 0] {
+                    s.spawn(move || (0..n).rev().filter(|i| i % 2 == half).for_each(f));
+                }
+            })
+        };
+        let serial = Bvh8::build(&boxes, BuildParams::default());
+        let parallel = Bvh8::build_on(&boxes, BuildParams::default(), &par);
+        assert_eq!(serial.order, parallel.order);
+        assert_eq!(serial.depth, parallel.depth);
+        assert_eq!(serial.nodes.len(), parallel.nodes.len());
+        for (a, b) in serial.nodes.iter().zip(&parallel.nodes) {
+            assert_eq!(a.child, b.child);
+            assert_eq!(a.perm, b.perm);
+            assert_eq!(format!("{:?}", (a.lo, a.hi)), format!("{:?}", (b.lo, b.hi)));
+        }
+        check(&boxes, &parallel, 12);
     }
 
     #[test]

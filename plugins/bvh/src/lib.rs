@@ -113,8 +113,10 @@ fn build<const W: usize>(
     g: rtk_kernel::accel::Gathered,
     params: BuildParams,
     bound: Bound,
+    env: &Prepare,
 ) -> Result<(Primitives, Bvh<W>, Volumes), PluginError> {
-    let mut bvh = Bvh::<W>::build(&g.boxes, params);
+    // Subtrees are built on the host's pool.
+    let mut bvh = Bvh::<W>::build_on(&g.boxes, params, &|n, f| env.parallel_for(n, f));
     // Leaves start at multiples of four: each names its block of four
     // triangles, screened at once.
     bvh.pad_leaves(4);
@@ -303,18 +305,18 @@ impl Object for BvhObject {
         Ok(())
     }
 
-    fn prepare(&mut self, _env: &Prepare) -> Result<(), PluginError> {
+    fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
         let g = Primitives::gather(&self.children)?;
         let params = build_params(&g, self.max_leaf);
         self.built = Some(if self.width == 8 {
-            let (prims, bvh, volumes) = build::<8>(g, params, self.bound)?;
+            let (prims, bvh, volumes) = build::<8>(g, params, self.bound, env)?;
             Built {
                 prims,
                 tree: Tree::Eight(bvh),
                 volumes,
             }
         } else {
-            let (prims, bvh, volumes) = build::<4>(g, params, self.bound)?;
+            let (prims, bvh, volumes) = build::<4>(g, params, self.bound, env)?;
             Built {
                 prims,
                 tree: Tree::Four(bvh),
