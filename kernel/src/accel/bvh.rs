@@ -245,6 +245,7 @@ impl<const W: usize> Bvh<W> {
                 0
             },
             tasks: Vec::new(),
+            par: Some(par),
         };
         let root = b.node(&mut order, 0, 1);
         b.run_tasks(&mut order, par);
@@ -1229,7 +1230,14 @@ struct Builder<'a> {
     task_size: usize,
     /// The nodes left so: (node, first, count, level).
     tasks: Vec<(u32, usize, usize, usize)>,
+    /// The pool the top levels' passes over their primitives are split
+    /// across (their nodes are few and large; below them, whole subtrees
+    /// are tasks); `None` in a task.
+    par: Option<&'a Parallel<'a>>,
 }
+
+/// Primitives per piece of a top-level node's pass ([`Builder::split_fold`]).
+const PAR_PIECE: usize = 16 * 1024;
 
 /// Runs `f(i)` for every `i < n`, on any threads ([`Bvh::build_on`]).
 pub type Parallel<'a> = dyn Fn(u64, &(dyn Fn(u64) + Sync)) + 'a;
@@ -1282,6 +1290,7 @@ impl Builder<'_> {
                 // A task builds its whole subtree itself.
                 task_size: 0,
                 tasks: Vec::new(),
+                par: None,
             };
             b.node(&mut part, first, level);
             *built[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((b.nodes, b.depth));
@@ -1330,9 +1339,7 @@ impl Builder<'_> {
             return me;
         }
         self.depth = self.depth.max(level);
-        let bounds = ids
-            .iter()
-            .fold(Bounds3::EMPTY, |b, &i| b.union(self.boxes[i as usize]));
+        let (bounds, cb) = self.extents(ids);
         let me = self.nodes.len() as u32;
         self.nodes.push(Node2 {
             bounds,
@@ -1342,9 +1349,6 @@ impl Builder<'_> {
         if ids.len() <= 1 || level >= MAX_DEPTH {
             return me;
         }
-        let cb = ids.iter().fold(Bounds3::EMPTY, |b, &i| {
-            b.include(self.centroids[i as usize])
-        });
         let mid = match self.sah(ids, &cb, area(&bounds)) {
             Some(s) if s.cost < self.leaf_cost(ids.len()) || ids.len() > self.params.max_leaf => {
                 self.partition(ids, &cb, &s)
@@ -1378,23 +1382,85 @@ impl Builder<'_> {
         n.div_ceil(self.params.block.max(1)) as f32
     }
 
+    /// The box of `ids` and the box of their centroids: one pass, split
+    /// across the pool for a node of the top levels ([`Builder::par`]).
+    fn extents(&self, ids: &[u32]) -> (Bounds3, Bounds3) {
+        let (boxes, centroids) = (self.boxes, self.centroids);
+        let fold = move |ids: &[u32]| {
+            ids.iter()
+                .fold((Bounds3::EMPTY, Bounds3::EMPTY), |(b, c), &i| {
+                    (b.union(boxes[i as usize]), c.include(centroids[i as usize]))
+                })
+        };
+        let merge =
+            |(a, b): (Bounds3, Bounds3), (c, d): (Bounds3, Bounds3)| (a.union(c), b.union(d));
+        self.split_fold(ids, fold, merge)
+    }
+
+    /// Every axis's bins over `ids` (each bin's box and count), in one
+    /// pass, split across the pool for a node of the top levels. A bin's
+    /// box is a union, exact in any order: the bins, and so the tree, do
+    /// not depend on the split.
+    fn bins(&self, ids: &[u32], cb: &Bounds3) -> [[(Bounds3, u32); BINS]; 3] {
+        let (boxes, centroids, cb) = (self.boxes, self.centroids, *cb);
+        let ext = cb.max.v() - cb.min.v();
+        let fold = move |ids: &[u32]| {
+            let mut bins = [[(Bounds3::EMPTY, 0u32); BINS]; 3];
+            for &i in ids {
+                let (b, c) = (boxes[i as usize], centroids[i as usize]);
+                for (axis, bins) in bins.iter_mut().enumerate() {
+                    let k = bin_of(c[axis], cb.min.v()[axis], ext[axis]);
+                    bins[k].0 = bins[k].0.union(b);
+                    bins[k].1 += 1;
+                }
+            }
+            bins
+        };
+        let merge = |mut a: [[(Bounds3, u32); BINS]; 3], b: [[(Bounds3, u32); BINS]; 3]| {
+            for (a, b) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+                *a = (a.0.union(b.0), a.1 + b.1);
+            }
+            a
+        };
+        self.split_fold(ids, fold, merge)
+    }
+
+    /// `fold` over `ids`, in pieces across the pool when there are many
+    /// (`PAR_PIECE` or more per piece, at least two), merged in order.
+    fn split_fold<T: Send>(
+        &self,
+        ids: &[u32],
+        fold: impl Fn(&[u32]) -> T + Sync,
+        merge: impl Fn(T, T) -> T,
+    ) -> T {
+        let Some(par) = self.par.filter(|_| ids.len() >= 2 * PAR_PIECE) else {
+            return fold(ids);
+        };
+        use std::sync::Mutex;
+        let pieces: Vec<&[u32]> = ids.chunks(PAR_PIECE).collect();
+        let out: Vec<Mutex<Option<T>>> = pieces.iter().map(|_| Mutex::new(None)).collect();
+        par(pieces.len() as u64, &|i| {
+            let r = fold(pieces[i as usize]);
+            *out[i as usize].lock().unwrap_or_else(|e| e.into_inner()) = Some(r);
+        });
+        out.into_iter()
+            .map(|m| {
+                m.into_inner()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .expect("every piece ran")
+            })
+            .reduce(merge)
+            .expect("at least two pieces")
+    }
+
     /// The cheapest binned split, if the centroids spread over more than one bin.
     fn sah(&self, ids: &[u32], cb: &Bounds3, parent: f32) -> Option<Split> {
         let ext = cb.max.v() - cb.min.v();
         let mut best: Option<Split> = None;
-        for axis in 0..3 {
+        let all = self.bins(ids, cb);
+        for (axis, bins) in all.iter().enumerate() {
             if !(ext[axis] > 0.0) {
                 continue;
-            }
-            let mut bins = [(Bounds3::EMPTY, 0u32); BINS];
-            for &i in ids {
-                let k = bin_of(
-                    self.centroids[i as usize][axis],
-                    cb.min.v()[axis],
-                    ext[axis],
-                );
-                bins[k].0 = bins[k].0.union(self.boxes[i as usize]);
-                bins[k].1 += 1;
             }
             // Sweep: areas and counts of everything right of each boundary.
             let mut right = [(0f32, 0u32); BINS];
