@@ -84,7 +84,8 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
         .filter(|p| matches!(p.module, Module::Object(m) if m.flattens_primitives()))
         .filter_map(|p| world.timings.prepare_by_class.get(&p.class))
         .map(|d| d.as_secs_f64())
-        .sum();
+        // From +0, not `sum`'s -0: a list builds nothing and reports 0.0 ms.
+        .fold(0.0, |a, b| a + b);
     let memory = resident_bytes().saturating_sub(rss0);
     let (lo, hi) = world_box(&world, &a.input)?;
     let (set_name, rays) = match (&a.rays, a.rayset) {
@@ -151,9 +152,19 @@ fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
     let (file, sets) = match ext.as_deref() {
         Some("ply") | Some("obj") => (mesh_scene(&a.input, a.aggregate.as_deref())?, vec![]),
         _ => {
-            let file = rtk_shell::SceneFile::read(&a.input)?;
+            let mut file = rtk_shell::SceneFile::read(&a.input)?;
             let sets = match &a.aggregate {
-                Some(class) => vec![format!("objects.{}.class={class}", root_object(&file)?)],
+                Some(class) => {
+                    let root = root_object(&file)?;
+                    let dropped = keep_class_neutral_keys(&mut file, &root, class);
+                    if !dropped.is_empty() {
+                        eprintln!(
+                            "note: --aggregate {class}: the root `{root}`'s own parameters ({}) are not {class}'s; dropped",
+                            dropped.join(", ")
+                        );
+                    }
+                    vec![format!("objects.{root}.class={class}")]
+                }
                 None => vec![],
             };
             (file, sets)
@@ -238,6 +249,48 @@ fn toml_quote(s: &str) -> String {
     }
     out.push('"');
     out
+}
+
+/// Swapping the class of `objects.<object>` for `class`: the definition's
+/// parameters belong to its old class (a `bvh`'s `width` means nothing to a
+/// `list`), so only `class` and `children` are kept when the class
+/// changes. Returns the keys dropped.
+fn keep_class_neutral_keys(
+    file: &mut rtk_shell::SceneFile,
+    object: &str,
+    class: &str,
+) -> Vec<String> {
+    use rtk_shell::tree::Val;
+    let Val::Table(sections) = &mut file.root.value else {
+        return Vec::new();
+    };
+    let Some((_, _, objects)) = sections.iter_mut().find(|(k, _, _)| k == "objects") else {
+        return Vec::new();
+    };
+    let Val::Table(objects) = &mut objects.value else {
+        return Vec::new();
+    };
+    let Some((_, _, def)) = objects.iter_mut().find(|(k, _, _)| k == object) else {
+        return Vec::new();
+    };
+    let Val::Table(keys) = &mut def.value else {
+        return Vec::new();
+    };
+    let same = keys
+        .iter()
+        .any(|(k, _, v)| k == "class" && matches!(&v.value, Val::Str(c) if c == class));
+    if same {
+        return Vec::new();
+    }
+    let mut dropped = Vec::new();
+    keys.retain(|(k, _, _)| {
+        let keep = k == "class" || k == "children";
+        if !keep {
+            dropped.push(k.clone());
+        }
+        keep
+    });
+    dropped
 }
 
 /// The object name the scene's `[render] root` instances.

@@ -81,3 +81,66 @@ fn ray_and_hit_files() {
         run.stderr
     );
 }
+
+/// `--aggregate` swapping a scene root's class drops the old class's
+/// parameters (a `list` has no `width`), says so on stderr, and answers as
+/// the root's own class does.
+#[test]
+fn aggregate_swap_drops_the_old_class_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = root().join("scenes/meshes/bunny.ply");
+    let scene = dir.path().join("bvh.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[render]\nroot = \"world\"\nintegrator = \"normals\"\n\
+             [cameras.none]\nclass = \"pinhole\"\n\
+             [objects.mesh]\nclass = \"mesh\"\nfile = {:?}\naccel = \"none\"\n\
+             [objects.world]\nclass = \"bvh\"\nwidth = 4\nmax_leaf = 6\nchildren = [\"mesh\"]\n",
+            bunny.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    // 200 rays down through the bunny's middle (its box: x within ±4.96,
+    // y 0 to 9.65), in the ray file's layout.
+    let mut rays = Vec::new();
+    for i in 0..200 {
+        let o = [-4.0 + 0.04 * i as f32, 20.0, 0.0];
+        for x in o.into_iter().chain([0.0, -1.0, 0.0, 0.0, f32::INFINITY]) {
+            rays.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    let ray_file = dir.path().join("rays.bin");
+    std::fs::write(&ray_file, rays).unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let run = |class: &str| {
+        Run::from(
+            rtk(&[
+                "trace",
+                &s(&scene),
+                "--rays",
+                &s(&ray_file),
+                "--aggregate",
+                class,
+                "--json",
+            ])
+            .output()
+            .unwrap(),
+        )
+    };
+    let (list, bvh) = (run("list"), run("bvh"));
+    assert!(list.ok, "{}", list.stderr);
+    assert!(
+        ["width", "max_leaf", "dropped"]
+            .iter()
+            .all(|w| list.stderr.contains(w)),
+        "{}",
+        list.stderr
+    );
+    assert!(bvh.ok && !bvh.stderr.contains("dropped"), "{}", bvh.stderr);
+    let (l, b) = (list.stats(), bvh.stats());
+    assert!(b["hits"].as_u64().unwrap() > 100, "{b}");
+    for key in ["hits", "sum_t", "sum_prim"] {
+        assert_eq!(l[key], b[key], "{key}");
+    }
+}
