@@ -592,6 +592,20 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
     if a.oracle.is_some() && kind != Kind::Object {
         bail!("--oracle is for object plugins; `{class}` is a {kind:?} plugin");
     }
+    // A misspelt oracle is a usage error, said before any check runs (not a
+    // failed check of the plugin under test).
+    if let Some(o) = &a.oracle {
+        let file = rtk_shell::plugins::library_file_name(o);
+        if !rtk_shell::plugins::is_identifier(o) {
+            bail!("--oracle: `{o}` is not a class name (letters, digits, _)");
+        }
+        if rtk_shell::plugins::PluginPath::standard(&extra)
+            .find(o)
+            .is_none()
+        {
+            bail!("--oracle: unknown class `{o}`: no {file} on the plugin path");
+        }
+    }
     let mut cx = Cx {
         args: &a,
         class: class.clone(),

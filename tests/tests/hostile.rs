@@ -516,6 +516,7 @@ fn file_cases() -> Vec<Case> {
         scene("conform_params_from_dev_zero", GOOD, &["--params @/dev/zero: cannot read the parameter file: it is a device, not a regular file"]).command(&["conform", &bvh, "--params", "@/dev/zero"]),
         scene("conform_params_from_a_fifo", GOOD, &["p.toml: cannot read the parameter file: it is a FIFO, not a regular file"]).with(Extra::Fifo("p.toml")).command(&["conform", &bvh, "--params", "@{dir}/p.toml"]),
         scene("conform_params_file_malformed", GOOD, &["--params @{dir}/p.toml: not a TOML table", "line 1, column 9"]).with(Extra::Bytes("p.toml", b"width = \n".to_vec())).command(&["conform", &bvh, "--params", "@{dir}/p.toml"]),
+        scene("conform_misspelt_oracle", GOOD, &["--oracle: unknown class `lsit`: no librtk_lsit.so on the plugin path"]).command(&["conform", &bvh, "--oracle", "lsit", "--quick"]).refuse(&["FAIL", "fails"]),
         scene("conform_plugin_is_a_fifo", GOOD, &["librtk_pipe.so: not a regular file"]).with(Extra::Fifo("librtk_pipe.so")).command(&["conform", "{dir}/librtk_pipe.so", "--class", "pipe"]),
         scene("conform_plugin_missing", GOOD, &["librtk_nope.so: No such file"]).command(&["conform", "{dir}/librtk_nope.so"]).refuse(&["cannot tell the class"]),
         scene("conform_plugin_not_a_library", GOOD, &["p.so: cannot load {dir}/p.so: "]).with(Extra::Bytes("p.so", b"root:x:0:0\n".to_vec())).command(&["conform", "{dir}/p.so", "--class", "p"]).refuse(&["dlopen failed"]),
