@@ -3,7 +3,7 @@
 //! primary, incoherent and occluded ray sets of `rtk trace`, interleaved
 //! (A, B, A, B, ...; best of N) so that a busy machine slows all alike.
 
-use crate::rays::RayRec;
+use crate::rays::{HitRec, RayRec};
 use crate::trace::{self, RaySet};
 use anyhow::{bail, Result};
 use rtk_shell::{Parallel, World};
@@ -169,12 +169,13 @@ pub fn run(a: BenchArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
             let rays = thin(trace::generate(set, lo, hi), a.max_rays);
             let mut best = vec![f64::INFINITY; built.len()];
             let mut hits = vec![0usize; built.len()];
+            let mut out = vec![HitRec::MISS; rays.len()];
             for _ in 0..a.repeats.max(1) {
                 for (i, b) in built.iter().enumerate() {
                     let t = Instant::now();
-                    let (h, _) = trace::trace_all(&b.world, &rays, occluded, pool, &next_query)?;
+                    trace::trace_all(&b.world, &rays, occluded, pool, &next_query, &mut out)?;
                     best[i] = best[i].min(t.elapsed().as_secs_f64());
-                    hits[i] = h.iter().filter(|h| h.t.is_finite()).count();
+                    hits[i] = out.iter().filter(|h| h.t.is_finite()).count();
                 }
             }
             for (i, b) in built.iter().enumerate() {

@@ -36,6 +36,16 @@ pub struct HitRec {
     pub v: f32,
 }
 
+impl HitRec {
+    /// A miss: `t` +inf, no primitive.
+    pub const MISS: HitRec = HitRec {
+        t: f32::INFINITY,
+        prim: u32::MAX,
+        u: 0.0,
+        v: 0.0,
+    };
+}
+
 /// The specification's random number generator.
 struct SplitMix64(u64);
 

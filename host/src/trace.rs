@@ -100,21 +100,20 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
         rays::write_rays(p, &rays)?;
     }
     let mut times = Vec::new();
-    let mut result = None;
+    let mut stats = Stats::default();
     // Query ids must never repeat on a thread, across passes too (mailboxes
     // are keyed by them): each thread's counter lives for the whole run.
     let next_query: Vec<AtomicU64> = (0..pool.current_num_threads())
         .map(|_| AtomicU64::new(0))
         .collect();
+    // One hit record per ray, written in place by every pass (as the Embree
+    // anchor writes its arrays): the timing is the tracing's alone.
+    let mut hits = vec![HitRec::MISS; rays.len()];
     for _ in 0..a.iters {
         let t = Instant::now();
-        let r = trace_all(&world, &rays, a.occluded, pool, &next_query)?;
+        stats = trace_all(&world, &rays, a.occluded, pool, &next_query, &mut hits)?;
         times.push(t.elapsed().as_secs_f64());
-        result = Some(r);
     }
-    let Some((hits, stats)) = result else {
-        unreachable!("at least one pass runs")
-    };
     let passes = times.clone();
     times.sort_by(f64::total_cmp);
     let secs = times[times.len() / 2];
@@ -309,44 +308,45 @@ fn root_object(file: &rtk_shell::SceneFile) -> Result<String> {
     }
 }
 
-/// Trace every ray on the pool, in chunks; hits in ray order.
+/// Trace every ray on the pool, in chunks, each ray's hit into its place
+/// in `out` (as long as `rays`); the counters of the pass.
 pub(crate) fn trace_all(
     world: &World,
     rays: &[RayRec],
     occluded: bool,
     pool: &rayon::ThreadPool,
     next_query: &[AtomicU64],
-) -> Result<(Vec<HitRec>, Stats)> {
+    out: &mut [HitRec],
+) -> Result<Stats> {
     use rayon::prelude::*;
+    assert_eq!(rays.len(), out.len(), "one hit record per ray");
     let threads = pool.current_num_threads() as u32;
-    let chunks: Vec<(Vec<HitRec>, Stats, Option<String>)> = pool.install(|| {
+    let chunks: Vec<(Stats, Option<String>)> = pool.install(|| {
         rays.par_chunks(CHUNK)
-            .map(|chunk| {
+            .zip(out.par_chunks_mut(CHUNK))
+            .map(|(chunk, out)| {
                 let ti = rayon::current_thread_index().unwrap_or(0);
                 let counter = &next_query[ti];
                 let mut ctx = TraceCtx::new(ti as u32, threads, counter.load(Ordering::Relaxed));
                 // One hit record per chunk, reset per ray.
                 let mut hit = Hit::new();
-                let hits = chunk
-                    .iter()
-                    .map(|r| trace_one(world, &mut ctx, &mut hit, r, occluded))
-                    .collect();
+                for (r, o) in chunk.iter().zip(out) {
+                    *o = trace_one(world, &mut ctx, &mut hit, r, occluded);
+                }
                 counter.store(ctx.query_counter(), Ordering::Relaxed);
                 let failure = ctx.failure().map(|(c, m)| format!("plugin `{c}` {m}"));
-                (hits, ctx.stats, failure)
+                (ctx.stats, failure)
             })
             .collect()
     });
-    let mut hits = Vec::with_capacity(rays.len());
     let mut stats = Stats::default();
-    for (h, s, failure) in chunks {
+    for (s, failure) in chunks {
         if let Some(f) = failure {
             bail!("tracing failed: {f}");
         }
-        hits.extend(h);
         stats.merge(&s);
     }
-    Ok((hits, stats))
+    Ok(stats)
 }
 
 #[inline]
@@ -365,12 +365,7 @@ fn trace_one(
         time: 0.0,
         generation: 0,
     };
-    let miss = HitRec {
-        t: f32::INFINITY,
-        prim: u32::MAX,
-        u: 0.0,
-        v: 0.0,
-    };
+    let miss = HitRec::MISS;
     if occluded {
         return if world.root.occluded(ctx, &ray) {
             HitRec {
