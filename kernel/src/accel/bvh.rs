@@ -1007,7 +1007,7 @@ impl HugeLines {
             std::ptr::copy_nonoverlapping(src.as_ptr(), raw, src.len());
         }
         Some(HugeLines {
-            ptr: std::ptr::NonNull::new(raw)?,
+            ptr: std::ptr::NonNull::new(raw).expect("a mapping is never at address 0"),
             len: src.len(),
             owner: LinesOwner::Mapped(base as usize, size),
         })
@@ -1876,6 +1876,23 @@ mod tests {
             assert_eq!(format!("{:?}", (a.lo, a.hi)), format!("{:?}", (b.lo, b.hi)));
         }
         check(&boxes, &parallel, 12);
+    }
+
+    #[test]
+    fn huge_lines_hold_a_copy_of_their_lines() {
+        // 3 MiB: mapped on Linux (2 MiB-aligned), a heap copy elsewhere;
+        // and a small layout, always a heap copy.
+        for n in [3 << 14, 100] {
+            let src: Vec<Line> = (0..n).map(|i: usize| Line([(i % 251) as u8; 64])).collect();
+            let h = HugeLines::new(&src);
+            assert_eq!(h.as_slice().len(), n);
+            assert!(h.as_slice().iter().zip(&src).all(|(a, b)| a.0 == b.0));
+            assert!(h.bytes() >= n * 64);
+            if cfg!(target_os = "linux") && n * 64 >= HugeLines::HUGE {
+                assert_eq!(h.ptr.as_ptr() as usize % HugeLines::HUGE, 0);
+            }
+        }
+        assert!(HugeLines::empty().as_slice().is_empty());
     }
 
     #[test]
