@@ -1,7 +1,8 @@
 //! The codebase's one BVH: a binned-SAH binary build collapsed into a
 //! W-wide tree (W = 4 or 8) whose nodes are tested W boxes at a time (SSE
-//! at 4, AVX2 at 8, chosen at run time by CPU feature detection, with a
-//! portable test the unit tests check against both), near children first.
+//! at 4; AVX2 or AVX-512 at 8, chosen at run time by CPU feature detection,
+//! [`Simd`]; a portable test the unit tests check against each), near
+//! children first.
 //!
 //! What it takes from the public leaders:
 //! - **Embree's BVH4/BVH8**: four or eight children per node in
@@ -47,6 +48,23 @@ pub enum Slot {
     Node(usize),
     /// A leaf: a range of [`Bvh4::order`].
     Leaf(Range<usize>),
+}
+
+/// Which walk an 8-wide tree's traversals run ([`Bvh::set_simd`]). A
+/// build picks the best the CPU has ([`Bvh::best_simd`]); the others stay
+/// selectable, to compare them or to test the fallback. Every walk visits
+/// the same nodes in the same order and gives the same hits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Simd {
+    /// One box at a time, any CPU (and the only walk of a 4-wide tree
+    /// other than its SSE test, which every x86_64 CPU runs).
+    Portable,
+    /// The 8-wide test and ordering in AVX2 registers.
+    Avx2,
+    /// The AVX2 walk with AVX-512's mask registers and register
+    /// compresses in place of its lookup table, and the leaf test compiled
+    /// for AVX-512 VL.
+    Avx512,
 }
 
 /// A gap in a padded leaf order ([`Bvh4::pad_leaves`]).
@@ -122,9 +140,10 @@ impl<const W: usize> Node<W> {
 
 /// The 4-wide tree: SSE, every x86_64 CPU (and the portable test elsewhere).
 pub type Bvh4 = Bvh<4>;
-/// The 8-wide tree: AVX2 where the CPU has it (detected at run time), the
-/// portable test otherwise. Half the depth of [`Bvh4`]: fewer dependent
-/// node fetches per ray, which is what incoherent rays wait on.
+/// The 8-wide tree: AVX-512 or AVX2 where the CPU has it (detected at run
+/// time, [`Simd`]), the portable test otherwise. Half the depth of
+/// [`Bvh4`]: fewer dependent node fetches per ray, which is what incoherent
+/// rays wait on.
 pub type Bvh8 = Bvh<8>;
 
 /// A `W`-wide BVH over primitive boxes (W = 4 or 8). Leaves are ranges of
@@ -135,8 +154,8 @@ pub struct Bvh<const W: usize> {
     leaves: Vec<LeafInfo>,
     /// The 8-wide walk's layout, when [`Bvh::interleave`] made one.
     lines: HugeLines,
-    /// Test nodes with AVX2 (W = 8 on a CPU that has it).
-    avx2: bool,
+    /// The walk traversals run (chosen at run time: [`Bvh::set_simd`]).
+    simd: Simd,
     /// Leaf order: `order[k]` is the primitive stored `k`-th.
     pub order: Vec<u32>,
     /// The root is itself a leaf (fewer primitives than a node splits).
@@ -180,31 +199,71 @@ impl<const W: usize> Bvh<W> {
     /// Whether this CPU runs the `W`-wide test in SIMD (always for W = 4 on
     /// x86_64; for W = 8, when it has AVX2).
     pub fn simd_available() -> bool {
+        W == 4 || Self::supports(Simd::Avx2)
+    }
+
+    /// Whether this CPU can run the `simd` walk of a `W`-wide tree.
+    /// [`Simd::Portable`] runs anywhere; the AVX walks are 8-wide only.
+    pub fn supports(simd: Simd) -> bool {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::is_x86_feature_detected as has;
-            // Every CPU with AVX2 has these too (Haswell, Zen); the walk is
-            // compiled for all of them (POPCNT and TZCNT count children).
-            W == 4
-                || (W == 8
-                    && has!("avx2")
+            // Every CPU with AVX2 has FMA, BMI1/2, POPCNT and LZCNT too
+            // (Haswell, Zen); the walk is compiled for all of them. The
+            // AVX-512 walk uses 256-bit vectors with mask registers and
+            // compresses (F, VL), compiled with BW and DQ as well, which
+            // every AVX-512 CPU since Skylake-X has.
+            let avx2 = || {
+                has!("avx2")
                     && has!("fma")
                     && has!("bmi1")
                     && has!("bmi2")
                     && has!("popcnt")
-                    && has!("lzcnt"))
+                    && has!("lzcnt")
+            };
+            match simd {
+                Simd::Portable => true,
+                Simd::Avx2 => W == 8 && avx2(),
+                Simd::Avx512 => {
+                    W == 8
+                        && avx2()
+                        && has!("avx512f")
+                        && has!("avx512vl")
+                        && has!("avx512bw")
+                        && has!("avx512dq")
+                }
+            }
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
-            false
+            simd == Simd::Portable
         }
     }
 
-    /// Use the AVX2 test (W = 8) or the portable one: the tests run both,
-    /// so CI checks the fallback on any machine. Asking for AVX2 on a CPU
-    /// without it is ignored.
-    pub fn set_avx2(&mut self, on: bool) {
-        self.avx2 = on && W == 8 && Self::simd_available();
+    /// The fastest walk this CPU runs: AVX-512, else AVX2, else portable
+    /// (what a build chooses).
+    pub fn best_simd() -> Simd {
+        [Simd::Avx512, Simd::Avx2]
+            .into_iter()
+            .find(|&s| Self::supports(s))
+            .unwrap_or(Simd::Portable)
+    }
+
+    /// Run the `simd` walk from now on, if this CPU can
+    /// ([`Bvh::supports`]); returns whether it was set (else the walk is
+    /// unchanged). The tests run every walk the CPU has, so CI checks the
+    /// portable fallback on any machine.
+    pub fn set_simd(&mut self, simd: Simd) -> bool {
+        let ok = Self::supports(simd);
+        if ok {
+            self.simd = simd;
+        }
+        ok
+    }
+
+    /// The walk traversals run.
+    pub fn simd(&self) -> Simd {
+        self.simd
     }
 
     /// Build over `boxes` (one per primitive; empty boxes are never hit),
@@ -257,7 +316,7 @@ impl<const W: usize> Bvh<W> {
             nodes: Vec::with_capacity(nodes2.len() / 2 + 1),
             leaves: Vec::with_capacity(nodes2.len() / 2 + 1),
             lines: HugeLines::empty(),
-            avx2: false,
+            simd: Simd::Portable,
             order,
             root_leaf: None,
             depth,
@@ -273,7 +332,7 @@ impl<const W: usize> Bvh<W> {
         out.name_leaves();
         out.nodes.shrink_to_fit();
         out.leaves.shrink_to_fit();
-        out.set_avx2(true);
+        out.set_simd(Self::best_simd());
         out
     }
 
@@ -425,7 +484,8 @@ impl<const W: usize> Bvh<W> {
     /// stretch of memory, and the hardware prefetcher that fetches one
     /// fetches the other: on incoherent rays a leaf was a cache miss of its
     /// own. The walk then hands leaves to [`Visit::leaf_lines`]. Only the
-    /// 8-wide AVX2 walk reads this layout; the others keep reading the nodes.
+    /// 8-wide AVX walks ([`Simd::Avx2`], [`Simd::Avx512`]) read this layout;
+    /// the portable walk keeps reading the nodes and [`Visit::leaf`].
     /// Returns whether it made one: a tree that is a single leaf has no
     /// nodes to lay out, and its leaf is still handed to [`Visit::leaf`].
     pub fn interleave<'a>(&mut self, data: impl Fn(usize) -> &'a [Line]) -> bool {
@@ -478,21 +538,16 @@ impl<const W: usize> Bvh<W> {
     ///
     /// The order only changes how soon `t_max` narrows, never which
     /// primitives can win: the 4-wide and portable walks sort the entered
-    /// children by entry distance; the 8-wide AVX2 walk ranks them by the
+    /// children by entry distance; the 8-wide AVX walks rank them by the
     /// node's precomputed order for the ray's octant (`Node::perm`), which
     /// costs one permutation instead of a sort.
     #[inline]
     pub fn traverse(&self, ray: &Ray, t_max: f32, node_tests: &mut u64, leaf: impl Visit) {
         #[cfg(target_arch = "x86_64")]
-        if self.avx2 {
-            // SAFETY: `avx2` is set only when the CPU has AVX2 (and W = 8).
-            return unsafe {
-                if self.lines.is_empty() {
-                    self.walk8_avx2::<true, false>(ray, t_max, node_tests, leaf)
-                } else {
-                    self.walk8_avx2::<true, true>(ray, t_max, node_tests, leaf)
-                }
-            };
+        if self.simd != Simd::Portable {
+            // SAFETY: `simd` names a walk only when the CPU has its
+            // features (`set_simd`), and W = 8.
+            return unsafe { self.walk8_on::<true>(ray, t_max, node_tests, leaf) };
         }
         let screen = |_, t, _| Some(t);
         self.walk::<false, false>(ray, t_max, node_tests, screen, leaf)
@@ -506,15 +561,9 @@ impl<const W: usize> Bvh<W> {
     #[inline]
     pub fn traverse_any(&self, ray: &Ray, t_max: f32, node_tests: &mut u64, leaf: impl Visit) {
         #[cfg(target_arch = "x86_64")]
-        if self.avx2 {
-            // SAFETY: `avx2` is set only when the CPU has AVX2 (and W = 8).
-            return unsafe {
-                if self.lines.is_empty() {
-                    self.walk8_avx2::<false, false>(ray, t_max, node_tests, leaf)
-                } else {
-                    self.walk8_avx2::<false, true>(ray, t_max, node_tests, leaf)
-                }
-            };
+        if self.simd != Simd::Portable {
+            // SAFETY: as in `traverse`.
+            return unsafe { self.walk8_on::<false>(ray, t_max, node_tests, leaf) };
         }
         let screen = |_, t, _| Some(t);
         self.walk::<false, false>(ray, t_max, node_tests, screen, leaf)
@@ -537,8 +586,9 @@ impl<const W: usize> Bvh<W> {
         leaf: impl Visit,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if self.avx2 {
-            // SAFETY: `avx2` is set only when the CPU has AVX2.
+        if self.simd != Simd::Portable {
+            // SAFETY: `simd` is set only when the CPU has its features, and
+            // every walk but the portable one needs AVX2.
             return unsafe { self.walk_avx2_screened(ray, t_max, node_tests, screen, leaf) };
         }
         self.walk::<true, false>(ray, t_max, node_tests, screen, leaf)
@@ -562,21 +612,101 @@ impl<const W: usize> Bvh<W> {
         self.walk::<true, true>(ray, t_max, node_tests, screen, leaf)
     }
 
-    /// The 8-wide walk, all in AVX2 registers: each node is six aligned
-    /// row loads (the near and far rows chosen once per ray), a subtract
-    /// and a multiply per row, a compare and a mask. The children entered
-    /// are permuted into the octant's front-to-back order and pushed in
-    /// one pair of 8-wide stores compressed by a lookup table (`COMPRESS`),
-    /// so no branch depends on their distances; the nearest comes straight
-    /// back off the stack (any-hit queries, `!ORDERED`, skip the ranking).
-    /// `LINES`: the tree is interleaved
-    /// ([`Bvh::interleave`]); nodes and leaves are line offsets into it.
+    /// The 8-wide walk for `ORDERED` (nearest-hit) or any-hit queries,
+    /// in the layout the tree has and with the SIMD it was set to.
     ///
     /// # Safety
-    /// The CPU must have AVX2; `W` must be 8.
+    /// `self.simd` is AVX2 or AVX-512 (set only when the CPU has it); `W`
+    /// must be 8.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn walk8_on<const ORDERED: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        leaf: impl Visit,
+    ) {
+        let lines = !self.lines.is_empty();
+        // SAFETY: per the contract, the CPU has what each walk is compiled for.
+        unsafe {
+            match (self.simd, lines) {
+                (Simd::Avx512, false) => {
+                    self.walk8_avx512::<ORDERED, false>(ray, t_max, node_tests, leaf)
+                }
+                (Simd::Avx512, true) => {
+                    self.walk8_avx512::<ORDERED, true>(ray, t_max, node_tests, leaf)
+                }
+                (_, false) => self.walk8_avx2::<ORDERED, false>(ray, t_max, node_tests, leaf),
+                (_, true) => self.walk8_avx2::<ORDERED, true>(ray, t_max, node_tests, leaf),
+            }
+        }
+    }
+
+    /// [`Bvh::walk8`] compiled with AVX2 enabled, so the 8-wide test's
+    /// intrinsics and the leaf test inline into it: the dispatch is one
+    /// branch per ray.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 (and what [`Bvh::supports`] checks with it);
+    /// `W` must be 8.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,popcnt,lzcnt")]
     unsafe fn walk8_avx2<const ORDERED: bool, const LINES: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        leaf: impl Visit,
+    ) {
+        // SAFETY: the CPU has AVX2, per the contract.
+        unsafe { self.walk8::<ORDERED, LINES, false>(ray, t_max, node_tests, leaf) }
+    }
+
+    /// [`Bvh::walk8`] with its AVX-512 steps, compiled with AVX-512 (F, VL,
+    /// BW, DQ) enabled: the leaf test inlined into it is compiled so too
+    /// (mask registers for its lane logic).
+    ///
+    /// # Safety
+    /// The CPU must have what [`Bvh::supports`] checks for
+    /// [`Simd::Avx512`]; `W` must be 8.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,popcnt,lzcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+    unsafe fn walk8_avx512<const ORDERED: bool, const LINES: bool>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        node_tests: &mut u64,
+        leaf: impl Visit,
+    ) {
+        // SAFETY: the CPU has AVX-512 F and VL, per the contract.
+        unsafe { self.walk8::<ORDERED, LINES, true>(ray, t_max, node_tests, leaf) }
+    }
+
+    /// The 8-wide walk, all in vector registers: each node is six aligned
+    /// row loads (the near and far rows chosen once per ray), a subtract
+    /// and a multiply per row, a compare and a mask. The children entered
+    /// are put in the octant's front-to-back order (`Node::perm`) and
+    /// pushed in one pair of 8-wide stores, so no branch depends on their
+    /// distances; the nearest comes straight back off the stack (any-hit
+    /// queries, `!ORDERED`, skip the ranking). How the entered children
+    /// are packed together differs by `X512`:
+    /// - AVX2: the ranked children and distances are each permuted by an
+    ///   entry of a lookup table (`COMPRESS`, 8 KiB) indexed by the mask;
+    /// - AVX-512: the rank itself is compressed (`VPCOMPRESSD` into a
+    ///   register; never into memory, microcoded on Zen 4) and children and
+    ///   distances are permuted by it: one permutation fewer, no table.
+    ///
+    /// `LINES`: the tree is interleaved ([`Bvh::interleave`]); nodes and
+    /// leaves are line offsets into it.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2, and AVX-512 F, VL and DQ if `X512`; the
+    /// caller is compiled with them (`walk8_avx2`, `walk8_avx512`), so the
+    /// intrinsics inline. `W` must be 8.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn walk8<const ORDERED: bool, const LINES: bool, const X512: bool>(
         &self,
         ray: &Ray,
         t_max: f32,
@@ -631,36 +761,68 @@ impl<const W: usize> Bvh<W> {
                         t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(o[a], f), inv_far[a]), t1);
                     }
                     let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1);
-                    let mask = _mm256_movemask_ps(hit) as u32;
+                    let mask = if X512 {
+                        _mm256_movepi32_mask(_mm256_castps_si256(hit)) as u32
+                    } else {
+                        _mm256_movemask_ps(hit) as u32
+                    };
                     if mask != 0 {
                         let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
                         if mask & (mask - 1) == 0 {
                             cur = node.child[mask.trailing_zeros() as usize];
                             continue;
                         }
-                        let (mut m, mut t, mut c) = (mask, t0, child);
-                        if ORDERED {
-                            let perm = _mm256_load_si256(node.perm.as_ptr() as *const __m256i);
-                            // VPERMPS reads the low three bits of each index.
-                            let rank = _mm256_srl_epi32(perm, shift);
-                            m = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, rank)) as u32;
-                            t = _mm256_permutevar8x32_ps(t0, rank);
-                            c = _mm256_permutevar8x32_epi32(child, rank);
-                        }
-                        let pick =
-                            _mm256_load_si256(COMPRESS[m as usize].as_ptr() as *const __m256i);
                         assert!(sp + 8 <= STACK8, "BVH traversal stack overflow");
-                        _mm256_storeu_si256(
-                            ids.add(sp) as *mut __m256i,
-                            _mm256_permutevar8x32_epi32(c, pick),
-                        );
-                        if ORDERED {
-                            // An any-hit query's t_max never narrows: every
-                            // deferred child stays in range, no distance kept.
-                            _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t, pick));
+                        if X512 {
+                            // The slots to push, farthest first (the
+                            // stack's order, as `COMPRESS` makes it).
+                            let backwards = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
+                            let rank = if ORDERED {
+                                let perm = _mm256_load_si256(node.perm.as_ptr() as *const __m256i);
+                                // VPERMD reads the low three bits of each
+                                // index: the octant's, after the shift.
+                                _mm256_permutevar8x32_epi32(
+                                    _mm256_srl_epi32(perm, shift),
+                                    backwards,
+                                )
+                            } else {
+                                backwards
+                            };
+                            let ranked =
+                                _mm256_permutevar8x32_epi32(_mm256_castps_si256(hit), rank);
+                            let pick =
+                                _mm256_maskz_compress_epi32(_mm256_movepi32_mask(ranked), rank);
+                            _mm256_storeu_si256(
+                                ids.add(sp) as *mut __m256i,
+                                _mm256_permutevar8x32_epi32(child, pick),
+                            );
+                            if ORDERED {
+                                _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t0, pick));
+                            }
+                        } else {
+                            let (mut m, mut t, mut c) = (mask, t0, child);
+                            if ORDERED {
+                                let perm = _mm256_load_si256(node.perm.as_ptr() as *const __m256i);
+                                // VPERMPS reads the low three bits of each index.
+                                let rank = _mm256_srl_epi32(perm, shift);
+                                m = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, rank)) as u32;
+                                t = _mm256_permutevar8x32_ps(t0, rank);
+                                c = _mm256_permutevar8x32_epi32(child, rank);
+                            }
+                            let pick =
+                                _mm256_load_si256(COMPRESS[m as usize].as_ptr() as *const __m256i);
+                            _mm256_storeu_si256(
+                                ids.add(sp) as *mut __m256i,
+                                _mm256_permutevar8x32_epi32(c, pick),
+                            );
+                            if ORDERED {
+                                // An any-hit query's t_max never narrows: every
+                                // deferred child stays in range, no distance kept.
+                                _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t, pick));
+                            }
                         }
                         // Farthest first: the nearest is on top, taken now.
-                        let deferred = m.count_ones() as usize - 1;
+                        let deferred = mask.count_ones() as usize - 1;
                         // The others wait until the nearest's subtree is
                         // done: fetch them meanwhile (an incoherent ray
                         // spends most of its time waiting on memory).
@@ -1571,7 +1733,7 @@ impl Precomp {
             }
             if W == 8 && AVX {
                 // SAFETY: the rows are eight floats, `tn` has room for
-                // eight; the caller runs with AVX2 (`walk_avx2`).
+                // eight; the caller runs with AVX2 (`walk_avx2_screened`).
                 let m = unsafe {
                     self.test8_avx(rows(&n.lo), rows(&n.hi), t_min, t_max, tn.as_mut_ptr())
                 };
@@ -1798,27 +1960,131 @@ mod tests {
             let boxes = random_boxes(n, seed);
             let bvh = Bvh4::build(&boxes, BuildParams::default());
             check(&boxes, &bvh, seed + 100);
-            // 8-wide, with AVX2 where the CPU has it and with the portable
-            // test (the fallback a CPU without AVX2 runs).
+            // 8-wide, with each walk the CPU has: the portable one (the
+            // fallback a CPU without AVX2 runs), AVX2, AVX-512.
             let mut bvh = Bvh8::build(&boxes, BuildParams::default());
-            check(&boxes, &bvh, seed + 100);
-            bvh.set_avx2(false);
-            check(&boxes, &bvh, seed + 100);
-            // Interleaved with its leaves' data (the AVX2 walk's layout).
+            for simd in ALL_SIMD {
+                if bvh.set_simd(simd) {
+                    check(&boxes, &bvh, seed + 100);
+                }
+            }
+            // Interleaved with its leaves' data (the AVX walks' layout).
             if Bvh8::simd_available() && n > 1 {
-                bvh.set_avx2(true);
-                let data: std::collections::HashMap<usize, [Line; 1]> = bvh
-                    .leaves()
-                    .map(|r| {
-                        let mut line = Line([0; 64]);
-                        line.0[..8].copy_from_slice(&(r.start as u64).to_ne_bytes());
-                        (r.start, [line])
-                    })
-                    .collect();
+                let data = first_lines(&bvh);
                 assert!(bvh.interleave(|first| &data[&first]));
-                check(&boxes, &bvh, seed + 100);
+                for simd in [Simd::Avx2, Simd::Avx512] {
+                    if bvh.set_simd(simd) {
+                        check(&boxes, &bvh, seed + 100);
+                    }
+                }
             }
         }
+    }
+
+    const ALL_SIMD: [Simd; 3] = [Simd::Portable, Simd::Avx2, Simd::Avx512];
+
+    /// Each leaf's data for [`Bvh::interleave`]: one line holding its
+    /// first entry, read back by [`FirstLines`].
+    fn first_lines(bvh: &Bvh8) -> std::collections::HashMap<usize, [Line; 1]> {
+        bvh.leaves()
+            .map(|r| {
+                let mut line = Line([0; 64]);
+                line.0[..8].copy_from_slice(&(r.start as u64).to_ne_bytes());
+                (r.start, [line])
+            })
+            .collect()
+    }
+
+    /// Records the leaves a walk visits, in order, by first entry (from
+    /// the index or from the interleaved line), and narrows `t_max` to
+    /// `narrow(first)`.
+    struct FirstLines<'a, F>(&'a mut Vec<usize>, F);
+    impl<F: FnMut(usize) -> Option<f32>> Visit for FirstLines<'_, F> {
+        fn leaf(&mut self, first: usize) -> Option<f32> {
+            self.0.push(first);
+            (self.1)(first)
+        }
+        fn leaf_lines(&mut self, lines: &[Line]) -> Option<f32> {
+            let first = u64::from_ne_bytes(lines[0].0[..8].try_into().unwrap()) as usize;
+            self.0.push(first);
+            (self.1)(first)
+        }
+    }
+
+    /// The AVX-512 walk is the AVX2 walk with other instructions: on
+    /// nearest-hit queries whose leaves narrow `t_max` (so deferred
+    /// children are dropped by distance) and on any-hit queries, in both
+    /// layouts, it visits the same leaves in the same order.
+    #[test]
+    fn the_avx512_walk_visits_what_the_avx2_walk_does() {
+        if !Bvh8::supports(Simd::Avx512) {
+            eprintln!("skipped: this CPU has no AVX-512");
+            return;
+        }
+        let boxes = random_boxes(3000, 21);
+        let mut bvh = Bvh8::build(&boxes, BuildParams::default());
+        let mut r = RngState::seeded(22);
+        let rays: Vec<Ray> = (0..3000)
+            .map(|k| {
+                let o = Vec3::new(
+                    r.range_f32(-15.0, 15.0),
+                    r.range_f32(-15.0, 15.0),
+                    r.range_f32(-15.0, 15.0),
+                );
+                let d = if k % 5 == 0 {
+                    [Vec3::X, Vec3::NEG_Y, Vec3::new(-0.0, 0.0, -1.0)][k % 3]
+                } else {
+                    Vec3::new(
+                        r.range_f32(-1.0, 1.0),
+                        r.range_f32(-1.0, 1.0),
+                        r.range_f32(-1.0, 1.0),
+                    )
+                };
+                Ray::new(o, d)
+            })
+            .collect();
+        let mut visited = 0;
+        for interleaved in [false, true] {
+            if interleaved {
+                let data = first_lines(&bvh);
+                assert!(bvh.interleave(|first| &data[&first]));
+            }
+            for ray in &rays {
+                let runs = [Simd::Avx2, Simd::Avx512].map(|simd| {
+                    assert!(bvh.set_simd(simd));
+                    let (mut near, mut any) = (Vec::new(), Vec::new());
+                    let (mut tests_near, mut tests_any) = (0, 0);
+                    // A leaf "hits" at a distance its first entry picks,
+                    // narrowing the query as a real hit would.
+                    let t_of = |first: usize| Some(1.0 + (first % 7) as f32 * 3.0);
+                    bvh.traverse(
+                        ray,
+                        f32::INFINITY,
+                        &mut tests_near,
+                        FirstLines(&mut near, t_of),
+                    );
+                    // Any-hit: keep going (a miss) until the fourth leaf.
+                    let mut left = 4;
+                    let stop = |_| {
+                        left -= 1;
+                        (left > 0).then_some(f32::INFINITY)
+                    };
+                    bvh.traverse_any(
+                        ray,
+                        f32::INFINITY,
+                        &mut tests_any,
+                        FirstLines(&mut any, stop),
+                    );
+                    (near, any, tests_near, tests_any)
+                });
+                visited += runs[0].0.len();
+                assert_eq!(runs[0], runs[1], "the walks differ on {ray:?}");
+            }
+        }
+        assert!(
+            visited > 1000,
+            "too few leaves visited to compare: {visited}"
+        );
     }
 
     #[test]

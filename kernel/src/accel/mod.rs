@@ -14,7 +14,7 @@ mod bvh;
 mod mailbox;
 mod prims;
 
-pub use bvh::{BuildParams, Bvh, Bvh4, Bvh8, Line, Parallel, Slot, Visit, MAX_DEPTH, PAD};
+pub use bvh::{BuildParams, Bvh, Bvh4, Bvh8, Line, Parallel, Simd, Slot, Visit, MAX_DEPTH, PAD};
 pub use mailbox::Mailbox;
 pub use prims::{tri_bounds, AnyHit, Gathered, Nearest, PrimRef, Primitives, WHOLE};
 

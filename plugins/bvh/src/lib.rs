@@ -1,7 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 use rtk_kernel::accel::{
-    cull_bound, AnyHit, BuildParams, Bvh, Line, Nearest, Primitives, Slot, Visit,
+    cull_bound, AnyHit, BuildParams, Bvh, Line, Nearest, Primitives, Simd, Slot, Visit,
 };
 use rtk_kernel::geom::{overlaps, SlabRay, SphereRay};
 use rtk_kernel::serde::Deserialize;
@@ -16,6 +16,31 @@ struct Params {
     width: Option<u32>,
     #[serde(default)]
     bound: Bound,
+    #[serde(default)]
+    simd: SimdChoice,
+}
+
+/// The walk of an 8-wide tree (`simd`): the best the CPU has, or one
+/// named, to compare them (each gives the same hits).
+#[derive(Deserialize, Default, Clone, Copy, PartialEq)]
+#[serde(crate = "rtk_kernel::serde", rename_all = "lowercase")]
+enum SimdChoice {
+    #[default]
+    Auto,
+    Avx512,
+    Avx2,
+    Portable,
+}
+
+impl SimdChoice {
+    fn simd(self) -> Simd {
+        match self {
+            SimdChoice::Auto => Bvh::<8>::best_simd(),
+            SimdChoice::Avx512 => Simd::Avx512,
+            SimdChoice::Avx2 => Simd::Avx2,
+            SimdChoice::Portable => Simd::Portable,
+        }
+    }
 }
 
 /// The volume each child of a node is bounded by (issue 12: what the
@@ -57,6 +82,8 @@ struct BvhObject {
     max_leaf: Option<u32>,
     width: u32,
     bound: Bound,
+    /// The 8-wide tree's walk (checked against the CPU in `create`).
+    simd: Simd,
     built: Option<Built>,
 }
 
@@ -78,11 +105,25 @@ impl Plugin for BvhObject {
                 ))
             }
         };
+        if width == 4 && p.simd != SimdChoice::Auto {
+            return Err(PluginError::key(
+                "simd",
+                "chooses the walk of an 8-wide tree; a 4-wide one always runs SSE: drop `simd` or set `width = 8`",
+            ));
+        }
+        let simd = p.simd.simd();
+        if !Bvh::<8>::supports(simd) {
+            return Err(PluginError::key(
+                "simd",
+                format!("this CPU cannot run the {simd:?} walk (\"auto\" picks the best it has)"),
+            ));
+        }
         Ok(BvhObject {
             children: Vec::new(),
             max_leaf: p.max_leaf,
             width,
             bound: p.bound,
+            simd,
             built: None,
         })
     }
@@ -114,10 +155,15 @@ fn build<const W: usize>(
     g: rtk_kernel::accel::Gathered,
     params: BuildParams,
     bound: Bound,
+    simd: Simd,
     env: &Prepare,
 ) -> Result<(Primitives, Bvh<W>, Volumes), PluginError> {
     // Subtrees are built on the host's pool.
     let mut bvh = Bvh::<W>::build_on(&g.boxes, params, &|n, f| env.parallel_for(n, f));
+    if W == 8 {
+        // Checked against the CPU in `create`.
+        bvh.set_simd(simd);
+    }
     // Leaves start at multiples of four: each names its block of four
     // triangles, screened at once.
     bvh.pad_leaves(4);
@@ -140,8 +186,8 @@ fn build<const W: usize>(
     };
     prims.pack();
     prims.mark_leaves(bvh.leaves());
-    if W == 8 && Bvh::<W>::simd_available() && bound == Bound::Box {
-        // The 8-wide AVX2 walk reads each node with its leaves beside it,
+    if W == 8 && bvh.simd() != Simd::Portable && bound == Bound::Box {
+        // The 8-wide AVX walks read each node with its leaves beside it,
         // and nothing reads the table's own blocks after.
         if bvh.interleave(|first| prims.leaf_lines(first)) {
             prims.drop_blocks();
@@ -310,14 +356,14 @@ impl Object for BvhObject {
         let g = Primitives::gather(&self.children)?;
         let params = build_params(&g, self.max_leaf);
         self.built = Some(if self.width == 8 {
-            let (prims, bvh, volumes) = build::<8>(g, params, self.bound, env)?;
+            let (prims, bvh, volumes) = build::<8>(g, params, self.bound, self.simd, env)?;
             Built {
                 prims,
                 tree: Tree::Eight(bvh),
                 volumes,
             }
         } else {
-            let (prims, bvh, volumes) = build::<4>(g, params, self.bound, env)?;
+            let (prims, bvh, volumes) = build::<4>(g, params, self.bound, self.simd, env)?;
             Built {
                 prims,
                 tree: Tree::Four(bvh),
