@@ -28,6 +28,11 @@ pub struct TraceArgs {
     /// The aggregate class: over the mesh, or in place of the scene root's class.
     #[arg(long, value_name = "NAME")]
     pub aggregate: Option<String>,
+    /// Override a scene value (as `rtk render --set`), after `--aggregate`;
+    /// a mesh's generated scene names its root `world`, e.g.
+    /// --set objects.world.simd=avx2 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
     /// Tracing threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -169,6 +174,7 @@ fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
             (file, sets)
         }
     };
+    let sets = sets.into_iter().chain(a.set.iter().cloned()).collect();
     build_world(file, sets, &a.plugin_path, parallel)
 }
 

@@ -390,6 +390,8 @@ fn number_cases() -> Vec<Case> {
         edit("transform_step_an_empty_array", "{ object = \"tri\" }", "{ object = \"tri\", transform = [[]] }", &["key `transform[0]`", "expected a table, found 0 elements"]).refuse(&["struct", "Step"]),
         edit("transform_scale_a_string", "{ object = \"tri\" }", "{ object = \"tri\", transform = [{ scale = \"x\" }] }", &["key `transform[0].scale`", "expected a number or an array [x, y, z]"]).refuse(&["untagged", "enum"]),
         edit("bvh_bound_an_integer", "class = \"list\"\nchildren", "class = \"bvh\"\nbound = 1\nchildren", &["scene.toml:31:9", "objects.world: key `bound`", "expected a string, one of the accepted names"]).refuse(&["expected value"]),
+        edit("bvh_simd_misspelt", "class = \"list\"\nchildren", "class = \"bvh\"\nsimd = \"avx\"\nchildren", &["scene.toml:31:8", "objects.world: key `simd`", "avx512", "portable"]),
+        edit("bvh_simd_on_a_4_wide_tree", "class = \"list\"\nchildren", "class = \"bvh\"\nwidth = 4\nsimd = \"portable\"\nchildren", &["objects.world: key `simd`", "a 4-wide one always runs SSE"]),
         edit("transform_rotate_a_number", "{ object = \"tri\" }", "{ object = \"tri\", transform = [{ rotate = 5 }] }", &["key `transform[0].rotate`", "expected a table, found the integer 5"]).refuse(&["AxisAngle"]),
     ]
 }

@@ -144,3 +144,60 @@ fn aggregate_swap_drops_the_old_class_parameters() {
         assert_eq!(l[key], b[key], "{key}");
     }
 }
+
+/// Every walk of the bvh (`simd`) this CPU runs gives the same hit, ray for
+/// ray (the hit files are equal byte for byte), on the incoherent and
+/// occlusion rays of `scenes/walks.toml` (the bunny), chosen through
+/// `rtk trace --set`. A walk the CPU lacks is refused by name.
+#[test]
+fn every_bvh_walk_gives_the_same_hits() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = root().join("scenes/walks.toml");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    #[cfg(target_arch = "x86_64")]
+    let has = |w: &str| match w {
+        "avx2" => std::arch::is_x86_feature_detected!("avx2"),
+        "avx512" => {
+            std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+        }
+        _ => true,
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let has = |w: &str| matches!(w, "auto" | "portable");
+    for occluded in [false, true] {
+        let mut first: Option<Vec<u8>> = None;
+        for walk in ["auto", "portable", "avx2", "avx512"] {
+            let out = dir.path().join(format!("{walk}.bin"));
+            let mut args = vec![
+                "trace".to_string(),
+                s(&bunny),
+                "--rayset".into(),
+                "incoherent".into(),
+                "--set".into(),
+                format!("objects.world.simd={walk}"),
+                "--out".into(),
+                s(&out),
+            ];
+            if occluded {
+                args.push("--occluded".into());
+            }
+            let args: Vec<&str> = args.iter().map(String::as_str).collect();
+            let run = Run::from(rtk(&args).output().unwrap());
+            if !has(walk) {
+                assert!(
+                    !run.ok && run.stderr.contains("key `simd`"),
+                    "{walk}: {}",
+                    run.stderr
+                );
+                continue;
+            }
+            assert!(run.ok, "{walk}: {}", run.stderr);
+            let hits = std::fs::read(&out).unwrap();
+            match &first {
+                None => first = Some(hits),
+                Some(f) => assert!(f == &hits, "{walk} differs (occluded: {occluded})"),
+            }
+        }
+    }
+}
