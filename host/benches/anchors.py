@@ -16,7 +16,9 @@ then
         --meshes ../shared/data/meshes/{bunny,teapot,dragon-200k}.ply --rounds 3
 
 --aggregates takes any of bvh, kdtree, octree, grid, slabs, raycls (default:
-the first four). raycls builds its cells while it traces: its build time
+the first four), each with parameters of its own after `+`, set on the
+generated scene's root: `bvh+simd=avx2,bvh+simd=avx512` times the bvh's two
+AVX walks side by side. raycls builds its cells while it traces: its build time
 (its `prepare`) leaves them out, and they are built in the first of the
 three passes `rtk trace --iters 3` times (the median pass is reported).
 """
@@ -41,8 +43,10 @@ def anchor(cmd):
 
 
 def rtk(exe, mesh, agg, rayset, extra, threads):
-    cmd = [exe, "trace", mesh, "--rayset", rayset, "--aggregate", agg,
-           "--threads", str(threads), "--iters", "3", "--json"] + extra
+    cls, *params = agg.split("+")
+    sets = [x for p in params for x in ("--set", f"objects.world.{p}")]
+    cmd = [exe, "trace", mesh, "--rayset", rayset, "--aggregate", cls,
+           "--threads", str(threads), "--iters", "3", "--json"] + sets + extra
     out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
     return json.loads(out)
 
