@@ -14,7 +14,7 @@ pub enum Format {
     /// Linear 32-bit float OpenEXR.
     Exr,
     /// rtk's film file (f64 sums and sample counts: checkpoints and crops,
-    /// `crate::checkpoint`), written by the caller, not by [`write`].
+    /// `crate::checkpoint`), written by the caller, not by [`write()`].
     Film,
 }
 

@@ -4,13 +4,14 @@
 //! create, instance and close steps, loading only the plugin libraries the
 //! objects reachable from the root need.
 //!
-//! - [`file`]: the scene file read and overridden (`--set`);
+//! - [`file`](mod@file): the scene file read and overridden (`--set`);
 //! - [`desc`]: the description checked, with errors that name the origin,
 //!   object and key;
 //! - [`plugins`]: the plugin path and the loader, which refuses a library
 //!   built against another kernel, built with `panic = "abort"`, or that is no
 //!   rtk plugin at all, before any of its code runs;
-//! - [`build`]: creation of the DAG and the [`World`] the renderer uses;
+//! - [`build`](mod@build): creation of the DAG and the [`World`] the renderer
+//!   uses;
 //! - [`safe`]: the `--safe` check that a scene names files only inside its
 //!   folder or the working directory.
 //!

@@ -352,7 +352,7 @@ fn push_quad(m: &mut Mesh, lo: DVec3, u: usize, v: usize, du: f64, dv: f64) {
     m.tris.push([n, n + 2, n + 3]);
 }
 
-/// A1: the unit box [0,1]³ with triangles lying in the planes x, y, z =
+/// A1: the unit box \[0,1\]³ with triangles lying in the planes x, y, z =
 /// k/4 (every one a cell or split plane of the structures: the grid of 8³,
 /// the octree's centre splits, the kd-tree's planes at box faces), its 12
 /// faces, and spheres whose boxes touch those planes. Rays start on the

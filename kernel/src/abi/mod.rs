@@ -7,8 +7,8 @@
 //! - [`values`]: plain data passed by pointer: rays, the hit-info stack, local
 //!   geometry, light and scattering samples. No pointers inside, so safe code
 //!   may build and read them freely.
-//! - [`trace`]: the per-thread [`TraceCtx`](trace::TraceCtx): counters, the
-//!   random stream and the failure record. Plain data too.
+//! - [`trace`]: the per-thread [`TraceCtx`]: counters, the random stream and
+//!   the failure record. Plain data too.
 //! - [`records`]: the function-pointer records: one root module per plugin kind
 //!   and the scene services the host offers integrators and shaders. Every
 //!   entry is an `unsafe extern "C" fn`: calling one is a promise about the

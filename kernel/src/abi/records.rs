@@ -390,7 +390,7 @@ pub struct ShaderModule {
         ) -> f32,
     >,
     /// Radiance the surface emits towards `wo` (unit, pointing away); only a
-    /// shader whose `lobes` has [`lobe::EMISSION`](super::lobe::EMISSION)
+    /// shader whose `lobes` has [`lobe::EMISSION`]
     /// is asked.
     #[sabi(missing_field(default))]
     pub emitted: Option<
@@ -510,7 +510,7 @@ pub struct LightModule {
 // --------------------------------------------------------------------------
 
 /// The kernel's `Trace` and the root's queries, lights and bound materials.
-/// Built by [`crate::host::scene_services`] from the host's implementation of
+/// Built by [`crate::host::ServicesTable`] from the host's implementation of
 /// [`crate::host::Services`]; plugins reach it through [`crate::Scene`].
 #[repr(C)]
 #[derive(StableAbi)]
@@ -582,7 +582,7 @@ pub struct SceneServices {
             geom: *const LocalGeom,
         ) -> f32,
     >,
-    /// The [`light_flag`](super::light_flag) bits of light `index`.
+    /// The [`light_flag`] bits of light `index`.
     #[sabi(missing_field(default))]
     pub light_flags: Option<unsafe extern "C" fn(host: *const c_void, index: u32) -> u32>,
 }

@@ -331,7 +331,7 @@ pub mod ray_kind {
 #[repr(C)]
 #[derive(StableAbi, Clone, Copy, Debug, Default, PartialEq)]
 pub struct CameraSample {
-    /// Film position in [0,1]²: x to the right, y downwards.
+    /// Film position in \[0,1\]²: x to the right, y downwards.
     pub film: [f32; 2],
     /// Lens sample in [0,1)².
     pub lens: [f32; 2],

@@ -296,7 +296,7 @@ pub trait PrimitiveSet: Object {
 /// and intersect them itself, inline, with the kernel's watertight routine,
 /// instead of calling `intersect_prims` once per leaf. Its `local_geom` must
 /// read the hit record an aggregate writes for it (see
-/// [`TriangleData`](crate::abi::TriangleData)): `hit.entry(level).prim` and
+/// [`TriangleData`]): `hit.entry(level).prim` and
 /// `.uv = [b1, b2]`, which is what [`Hit::record_leaf`] writes too.
 pub trait Triangles: PrimitiveSet {
     /// Positions and index triples, unchanged after `prepare`.

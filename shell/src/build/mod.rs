@@ -1,12 +1,12 @@
 //! Building the object DAG, loading only the plugins what is reachable from
 //! the root needs. Errors come before any expensive step:
-//! 1. [`reach`]: walk the instances from the root (cycles and depth checked),
+//! 1. `reach`: walk the instances from the root (cycles and depth checked),
 //!    collecting the definitions and shaders reachable;
-//! 2. [`needs`]: load exactly the classes they name (plus the camera, the
+//! 2. `needs`: load exactly the classes they name (plus the camera, the
 //!    integrator, the lights, and the instance-transform class if a reachable
 //!    instance has a transform);
 //! 3. create the camera, integrator and lights;
-//! 4. [`objects`]: create each reachable object definition once, bottom-up.
+//! 4. `objects`: create each reachable object definition once, bottom-up.
 
 mod emitters;
 mod needs;
