@@ -174,6 +174,13 @@ fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
             (file, sets)
         }
     };
+    if let Some(s) = a
+        .set
+        .iter()
+        .find(|s| s.split('=').next().map(str::trim) == Some("render.origin"))
+    {
+        bail!("--set {s}: rtk trace traces in world coordinates (ray files and ray sets are); render.origin cannot be set");
+    }
     let sets = sets.into_iter().chain(a.set.iter().cloned()).collect();
     build_world(file, sets, &a.plugin_path, parallel)
 }

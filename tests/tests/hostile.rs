@@ -506,6 +506,8 @@ fn file_cases() -> Vec<Case> {
         edit("raycls_negative_max_candidates", "class = \"list\"", "class = \"raycls\"\nmax_candidates = -1", &["scene.toml:", "objects.world: key `max_candidates`", "must be between 1 and 1048576"]).refuse(&["4294967295"]),
         scene("trace_rays_from_a_fifo", GOOD, &["rays.bin: cannot read the ray file: it is a FIFO, not a regular file"]).with(Extra::Fifo("rays.bin")).command(&["trace", "{dir}/tri.obj", "--rays", "{dir}/rays.bin"]),
         scene("trace_rays_from_dev_zero", GOOD, &["/dev/zero: cannot read the ray file: it is a device"]).command(&["trace", "{dir}/tri.obj", "--rays", "/dev/zero"]),
+        scene("trace_set_render_origin", GOOD, &["--set render.origin=camera: rtk trace traces in world coordinates", "render.origin cannot be set"]).command(&["trace", "{dir}/tri.obj", "--rayset", "primary", "--set", "render.origin=camera"]),
+        scene("trace_set_a_misspelt_key", GOOD, &["objects.world: key `simdd`", "unknown field"]).command(&["trace", "{dir}/tri.obj", "--rayset", "primary", "--set", "objects.world.simdd=avx2"]),
         scene("trace_iters_zero", GOOD, &["--iters must be at least 1"]).command(&["trace", "{dir}/tri.obj", "--rayset", "primary", "--iters", "0"]),
         scene("trace_scene_from_a_fifo", GOOD, &["pipe.toml: cannot read the scene file: it is a FIFO"]).with(Extra::Fifo("pipe.toml")).command(&["trace", "{dir}/pipe.toml", "--rayset", "primary"]),
         scene("trace_mesh_from_a_fifo", GOOD, &["objects.mesh: key `file`", "pipe.ply: cannot read the mesh file: it is a FIFO"]).with(Extra::Fifo("pipe.ply")).command(&["trace", "{dir}/pipe.ply", "--rayset", "primary"]),

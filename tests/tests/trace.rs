@@ -154,14 +154,17 @@ fn every_bvh_walk_gives_the_same_hits() {
     let dir = tempfile::tempdir().unwrap();
     let bunny = root().join("scenes/walks.toml");
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    // What `Bvh::supports` checks for each walk.
     #[cfg(target_arch = "x86_64")]
-    let has = |w: &str| match w {
-        "avx2" => std::arch::is_x86_feature_detected!("avx2"),
-        "avx512" => {
-            std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512vl")
+    let has = |w: &str| {
+        use std::arch::is_x86_feature_detected as x;
+        let avx2 = x!("avx2") && x!("fma") && x!("bmi1") && x!("bmi2") && x!("popcnt");
+        let avx2 = avx2 && x!("lzcnt");
+        match w {
+            "avx2" => avx2,
+            "avx512" => avx2 && x!("avx512f") && x!("avx512vl") && x!("avx512bw") && x!("avx512dq"),
+            _ => true,
         }
-        _ => true,
     };
     #[cfg(not(target_arch = "x86_64"))]
     let has = |w: &str| matches!(w, "auto" | "portable");

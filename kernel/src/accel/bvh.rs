@@ -56,8 +56,8 @@ pub enum Slot {
 /// the same nodes in the same order and gives the same hits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Simd {
-    /// One box at a time, any CPU (and the only walk of a 4-wide tree
-    /// other than its SSE test, which every x86_64 CPU runs).
+    /// One box at a time, any CPU. (A 4-wide tree ignores the choice: it
+    /// runs its SSE test on every x86_64 CPU, the portable one elsewhere.)
     Portable,
     /// The 8-wide test and ordering in AVX2 registers.
     Avx2,
@@ -199,7 +199,7 @@ impl<const W: usize> Bvh<W> {
     /// Whether this CPU runs the `W`-wide test in SIMD (always for W = 4 on
     /// x86_64; for W = 8, when it has AVX2).
     pub fn simd_available() -> bool {
-        W == 4 || Self::supports(Simd::Avx2)
+        (cfg!(target_arch = "x86_64") && W == 4) || Self::supports(Simd::Avx2)
     }
 
     /// Whether this CPU can run the `simd` walk of a `W`-wide tree.
@@ -637,8 +637,13 @@ impl<const W: usize> Bvh<W> {
                 (Simd::Avx512, true) => {
                     self.walk8_avx512::<ORDERED, true>(ray, t_max, node_tests, leaf)
                 }
-                (_, false) => self.walk8_avx2::<ORDERED, false>(ray, t_max, node_tests, leaf),
-                (_, true) => self.walk8_avx2::<ORDERED, true>(ray, t_max, node_tests, leaf),
+                (Simd::Avx2, false) => {
+                    self.walk8_avx2::<ORDERED, false>(ray, t_max, node_tests, leaf)
+                }
+                (Simd::Avx2, true) => {
+                    self.walk8_avx2::<ORDERED, true>(ray, t_max, node_tests, leaf)
+                }
+                (Simd::Portable, _) => unreachable!("the portable walk is not 8-wide SIMD"),
             }
         }
     }
@@ -679,7 +684,8 @@ impl<const W: usize> Bvh<W> {
         node_tests: &mut u64,
         leaf: impl Visit,
     ) {
-        // SAFETY: the CPU has AVX-512 F and VL, per the contract.
+        // SAFETY: the CPU has AVX-512 F, VL, BW and DQ (and AVX2), per the
+        // contract: `supports` checks each.
         unsafe { self.walk8::<ORDERED, LINES, true>(ray, t_max, node_tests, leaf) }
     }
 
@@ -695,7 +701,9 @@ impl<const W: usize> Bvh<W> {
     ///   entry of a lookup table (`COMPRESS`, 8 KiB) indexed by the mask;
     /// - AVX-512: the rank itself is compressed (`VPCOMPRESSD` into a
     ///   register; never into memory, microcoded on Zen 4) and children and
-    ///   distances are permuted by it: one permutation fewer, no table.
+    ///   distances are permuted by it: no table, and on nearest-hit queries
+    ///   one permutation fewer (any-hit queries permute the mask instead of
+    ///   loading a table entry: as many operations).
     ///
     /// `LINES`: the tree is interleaved ([`Bvh::interleave`]); nodes and
     /// leaves are line offsets into it.

@@ -5,7 +5,7 @@
 //! - [`Primitives`]: an aggregate's children flattened into primitives
 //!   (triangles as data, primitive sets, whole children), with leaf queries
 //!   that keep the `list`'s exact answer and tie rule;
-//! - [`Bvh`]: the one BVH of the codebase (binned SAH; 8-wide AVX2 nodes
+//! - [`Bvh`]: the one BVH of the codebase (binned SAH; 8-wide AVX-512 or AVX2 nodes
 //!   chosen at run time, 4-wide SSE nodes, a portable test for both);
 //! - [`Mailbox`]: per-thread "tested already in this query" marks for
 //!   structures that reference a primitive from several cells.

@@ -32,6 +32,15 @@ enum SimdChoice {
     Portable,
 }
 
+/// The `simd` value naming a walk.
+fn walk_name(s: Simd) -> &'static str {
+    match s {
+        Simd::Avx512 => "avx512",
+        Simd::Avx2 => "avx2",
+        Simd::Portable => "portable",
+    }
+}
+
 impl SimdChoice {
     fn simd(self) -> Simd {
         match self {
@@ -106,16 +115,31 @@ impl Plugin for BvhObject {
             }
         };
         if width == 4 && p.simd != SimdChoice::Auto {
-            return Err(PluginError::key(
-                "simd",
-                "chooses the walk of an 8-wide tree; a 4-wide one always runs SSE: drop `simd` or set `width = 8`",
-            ));
+            let why = if p.width.is_none() {
+                "the tree is 4-wide, as this CPU has no AVX2, and a 4-wide tree always runs SSE: drop `simd`"
+            } else {
+                "chooses the walk of an 8-wide tree; a 4-wide one always runs SSE: drop `simd` or set `width = 8`"
+            };
+            return Err(PluginError::key("simd", why));
         }
         let simd = p.simd.simd();
         if !Bvh::<8>::supports(simd) {
+            let here: Vec<String> = [Simd::Avx512, Simd::Avx2, Simd::Portable]
+                .into_iter()
+                .filter(|&s| Bvh::<8>::supports(s))
+                .map(|s| format!("\"{}\"", walk_name(s)))
+                .collect();
             return Err(PluginError::key(
                 "simd",
-                format!("this CPU cannot run the {simd:?} walk (\"auto\" picks the best it has)"),
+                format!(
+                    "\"{}\" needs {}, which this CPU lacks; it runs {} (\"auto\" picks the best)",
+                    walk_name(simd),
+                    match simd {
+                        Simd::Avx512 => "AVX-512 F, VL, BW and DQ (and AVX2)",
+                        _ => "AVX2, FMA, BMI1, BMI2, POPCNT and LZCNT",
+                    },
+                    here.join(" and ")
+                ),
             ));
         }
         Ok(BvhObject {
