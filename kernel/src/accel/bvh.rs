@@ -490,39 +490,53 @@ impl<const W: usize> Bvh<W> {
     /// nodes to lay out, and its leaf is still handed to [`Visit::leaf`].
     pub fn interleave<'a>(&mut self, data: impl Fn(usize) -> &'a [Line]) -> bool {
         let node_lines = std::mem::size_of::<Node<W>>() / 64;
-        let mut lines: Vec<Line> = Vec::new();
         if self.nodes.is_empty() {
             self.lines = HugeLines::empty();
             return false;
         }
+        // Counted first, so the layout is written once, in place, on its
+        // own pages (a growing `Vec` copied it twice more and faulted in
+        // pages the mapping then faulted in again).
+        let total = self.nodes.len() * node_lines
+            + self
+                .leaves
+                .iter()
+                .map(|l| data(l.first as usize).len())
+                .sum::<usize>();
+        assert!(
+            total < LEAF as usize,
+            "an interleaved BVH holds under 2^31 lines"
+        );
+        let mut out = HugeLines::zeroed(total);
+        let lines = out.as_mut_slice();
+        let mut len = 0;
         // (node, where its line offset goes: the parent's line and slot).
         let mut todo: Vec<(u32, Option<(usize, usize)>)> = vec![(0, None)];
         while let Some((n, parent)) = todo.pop() {
-            let at = lines.len();
-            assert!(
-                at < LEAF as usize,
-                "an interleaved BVH holds under 2^31 lines"
-            );
+            let at = len;
             if let Some((p, slot)) = parent {
-                set_child::<W>(&mut lines, p, slot, at as u32);
+                set_child::<W>(lines, p, slot, at as u32);
             }
             let mut node = self.nodes[n as usize];
-            lines.resize(at + node_lines, Line([0; 64]));
+            len += node_lines;
             for slot in 0..W {
                 let c = node.child[slot];
                 if c == EMPTY {
                     continue;
                 }
                 if c & LEAF != 0 {
-                    node.child[slot] = LEAF | lines.len() as u32;
-                    lines.extend_from_slice(data((c & !LEAF) as usize));
+                    node.child[slot] = LEAF | len as u32;
+                    let d = data((c & !LEAF) as usize);
+                    lines[len..len + d.len()].copy_from_slice(d);
+                    len += d.len();
                 } else {
                     todo.push((c, Some((at, slot))));
                 }
             }
             write_node(&mut lines[at..at + node_lines], &node);
         }
-        self.lines = HugeLines::new(&lines);
+        assert_eq!(len, total, "every node and leaf is laid out once");
+        self.lines = out;
         true
     }
 
@@ -1108,8 +1122,9 @@ enum LinesOwner {
     Mapped(usize, usize),
 }
 
-// SAFETY: `HugeLines` owns its storage (as a `Vec` does) and only hands out
-// shared slices of plain bytes; nothing mutates it after `new`.
+// SAFETY: `HugeLines` owns its storage (as a `Vec` does); it hands out
+// shared slices of plain bytes, and a mutable one only through `&mut self`
+// (`as_mut_slice`, while `interleave` fills it).
 unsafe impl Send for HugeLines {}
 // SAFETY: as above: shared access is read-only.
 unsafe impl Sync for HugeLines {}
@@ -1125,24 +1140,35 @@ impl HugeLines {
         }
     }
 
-    fn new(src: &[Line]) -> Self {
+    /// `n` zeroed lines, to be written through [`HugeLines::as_mut_slice`]
+    /// before the walk reads them: on a mapping of their own if they fill
+    /// a huge page (Linux), else on the heap.
+    fn zeroed(n: usize) -> Self {
         #[cfg(target_os = "linux")]
-        if let Some(mapped) = Self::mapped(src) {
+        if let Some(mapped) = Self::mapped(n) {
             return mapped;
         }
-        let v = src.to_vec();
+        let mut v = vec![Line([0; 64]); n];
         HugeLines {
-            ptr: std::ptr::NonNull::new(v.as_ptr() as *mut Line).expect("a Vec's pointer"),
-            len: v.len(),
+            ptr: std::ptr::NonNull::new(v.as_mut_ptr()).expect("a Vec's pointer"),
+            len: n,
             owner: LinesOwner::Heap(v),
         }
     }
 
-    /// A copy on fresh pages advised huge, or `None` (too small to fill a
-    /// huge page, or the mapping failed).
+    /// A copy of `src` (as [`HugeLines::zeroed`] places it).
+    #[cfg(test)]
+    fn new(src: &[Line]) -> Self {
+        let mut out = Self::zeroed(src.len());
+        out.as_mut_slice().copy_from_slice(src);
+        out
+    }
+
+    /// `n` zeroed lines on fresh pages advised huge, or `None` (too few to
+    /// fill a huge page, or the mapping failed).
     #[cfg(target_os = "linux")]
-    fn mapped(src: &[Line]) -> Option<Self> {
-        let bytes = std::mem::size_of_val(src);
+    fn mapped(n: usize) -> Option<Self> {
+        let bytes = n * std::mem::size_of::<Line>();
         if bytes < Self::HUGE {
             return None;
         }
@@ -1164,23 +1190,31 @@ impl HugeLines {
             return None;
         }
         let at = (base as usize).next_multiple_of(Self::HUGE);
-        let raw = at as *mut Line;
         // SAFETY: `at .. at + bytes` rounded up to 2 MiB lies inside the
         // mapping (`size` leaves a whole 2 MiB for the alignment) and is
         // untouched yet; madvise only advises the kernel, reads and writes
         // no memory, and its failure (a kernel without THP) leaves ordinary
-        // pages. The copy is of `src.len()` lines into that range (page
-        // aligned, so aligned for `Line`), which cannot overlap `src`.
+        // pages.
         unsafe {
             let advised = bytes.next_multiple_of(Self::HUGE);
             libc::madvise(at as *mut libc::c_void, advised, libc::MADV_HUGEPAGE);
-            std::ptr::copy_nonoverlapping(src.as_ptr(), raw, src.len());
         }
         Some(HugeLines {
-            ptr: std::ptr::NonNull::new(raw).expect("a mapping is never at address 0"),
-            len: src.len(),
+            // An anonymous mapping reads as zeros: `n` zeroed lines, page
+            // aligned (so aligned for `Line`).
+            ptr: std::ptr::NonNull::new(at as *mut Line).expect("a mapping is never at address 0"),
+            len: n,
             owner: LinesOwner::Mapped(base as usize, size),
         })
+    }
+
+    /// The lines, to fill (only while the layout is being made: `&mut
+    /// self` excludes any reader).
+    fn as_mut_slice(&mut self) -> &mut [Line] {
+        // SAFETY: `ptr` holds `len` initialised lines (zeros at least) or
+        // is dangling with `len` 0, owned by `self` and borrowed mutably
+        // through it alone.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.as_ptr(), self.len) }
     }
 
     fn is_empty(&self) -> bool {
