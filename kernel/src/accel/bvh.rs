@@ -1607,27 +1607,37 @@ impl Builder<'_> {
     /// box is a union, exact in any order: the bins, and so the tree, do
     /// not depend on the split.
     fn bins(&self, ids: &[u32], cb: &Bounds3) -> [[(Bounds3, u32); BINS]; 3] {
-        let (boxes, centroids, cb) = (self.boxes, self.centroids, *cb);
-        let ext = cb.max.v() - cb.min.v();
+        use glam::Vec3A;
+        let (boxes, centroids) = (self.boxes, self.centroids);
+        let binning = Binning::new(cb);
+        // Bins as SIMD corners (`Vec3A`: one MINPS and one MAXPS per union,
+        // against six scalar comparisons). `b.min(acc)` is `acc.union(b)`
+        // lane for lane: MINPS(b, acc) keeps `acc` unless `b < acc`, as
+        // `min_of` does, NaN and signed zeros included.
+        type Bins = [[(Vec3A, Vec3A, u32); BINS]; 3];
+        const EMPTY_BIN: (Vec3A, Vec3A, u32) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY, 0);
         let fold = move |ids: &[u32]| {
-            let mut bins = [[(Bounds3::EMPTY, 0u32); BINS]; 3];
+            let mut bins: Bins = [[EMPTY_BIN; BINS]; 3];
             for &i in ids {
-                let (b, c) = (boxes[i as usize], centroids[i as usize]);
+                let (b, c) = (&boxes[i as usize], centroids[i as usize]);
+                let (lo, hi) = (Vec3A::from(b.min.v()), Vec3A::from(b.max.v()));
                 for (axis, bins) in bins.iter_mut().enumerate() {
-                    let k = bin_of(c[axis], cb.min.v()[axis], ext[axis]);
-                    bins[k].0 = bins[k].0.union(b);
-                    bins[k].1 += 1;
+                    let bin = &mut bins[binning.bin(c[axis], axis)];
+                    bin.0 = lo.min(bin.0);
+                    bin.1 = hi.max(bin.1);
+                    bin.2 += 1;
                 }
             }
             bins
         };
-        let merge = |mut a: [[(Bounds3, u32); BINS]; 3], b: [[(Bounds3, u32); BINS]; 3]| {
+        let merge = |mut a: Bins, b: Bins| {
             for (a, b) in a.iter_mut().flatten().zip(b.iter().flatten()) {
-                *a = (a.0.union(b.0), a.1 + b.1);
+                *a = (b.0.min(a.0), b.1.max(a.1), a.2 + b.2);
             }
             a
         };
-        self.split_fold(ids, fold, merge)
+        let bins = self.split_fold(ids, fold, merge);
+        bins.map(|axis| axis.map(|(lo, hi, n)| (Bounds3::new(Vec3::from(lo), Vec3::from(hi)), n)))
     }
 
     /// `fold` over `ids`, in pieces across the pool when there are many
@@ -1697,11 +1707,11 @@ impl Builder<'_> {
 
     /// Put the primitives of bins below `s.bin` first; returns how many.
     fn partition(&self, ids: &mut [u32], cb: &Bounds3, s: &Split) -> usize {
-        let (lo, ext) = (cb.min.v()[s.axis], cb.max.v()[s.axis] - cb.min.v()[s.axis]);
+        let binning = Binning::new(cb);
         let c = self.centroids;
         let mut i = 0;
         for j in 0..ids.len() {
-            if bin_of(c[ids[j] as usize][s.axis], lo, ext) < s.bin {
+            if binning.bin(c[ids[j] as usize][s.axis], s.axis) < s.bin {
                 ids.swap(i, j);
                 i += 1;
             }
@@ -1710,11 +1720,32 @@ impl Builder<'_> {
     }
 }
 
-/// The bin of a centroid coordinate.
-#[inline]
-fn bin_of(x: f32, lo: f32, ext: f32) -> usize {
-    let k = ((x - lo) / ext * BINS as f32) as isize;
-    k.clamp(0, BINS as isize - 1) as usize
+/// Which bin a centroid falls in, per axis, over a node's centroid box:
+/// one subtraction and one multiplication by a factor made once per node
+/// (a division per centroid and axis was a third of the binning's time).
+/// The bins and the partition use this one mapping, so they agree.
+#[derive(Clone, Copy)]
+struct Binning {
+    lo: [f32; 3],
+    scale: [f32; 3],
+}
+
+impl Binning {
+    fn new(cb: &Bounds3) -> Self {
+        let (lo, hi) = (cb.min.v(), cb.max.v());
+        Binning {
+            lo: lo.to_array(),
+            // A flat axis (0 extent) gives ∞: every centroid there is 0·∞
+            // (NaN), which the conversion takes to bin 0; the SAH skips it.
+            scale: (hi - lo).to_array().map(|e| BINS as f32 / e),
+        }
+    }
+
+    #[inline(always)]
+    fn bin(&self, x: f32, axis: usize) -> usize {
+        let k = ((x - self.lo[axis]) * self.scale[axis]) as isize;
+        k.clamp(0, BINS as isize - 1) as usize
+    }
 }
 
 /// What a ray's box tests share: origin, reciprocal direction, and which
