@@ -20,7 +20,7 @@
 //!   Embree's builders fill a wide node, a child the SAH would make a leaf
 //!   of more than one block is opened too while the node has free slots;
 //!   only the children left when it is full become leaves. On the dragon
-//!   this gives Embree's tree: 12,714 nodes against its 13,754, SAH cost
+//!   this gives Embree's tree: 12,717 nodes against its 13,754, SAH cost
 //!   15.07 against its 15.08 ([`Bvh::sah`]).
 //!
 //! What is rtk's own: the robustness (`docs/numerics.md` rule 10: the far

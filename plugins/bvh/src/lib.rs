@@ -158,7 +158,7 @@ impl Plugin for BvhObject {
 /// costing a node visit (Embree's builders' costs). Over triangles only, a
 /// leaf may hold up to 12 (three blocks): with the kernel's build filling
 /// each node before it makes leaves, the dragon's tree then has Embree's
-/// own statistics (12,714 nodes and 46,980 leaves against Embree's 13,754
+/// own statistics (12,717 nodes and 46,993 leaves against Embree's 13,754
 /// and 50,041; SAH 10.88 + 4.18 against 10.99 + 4.09); its primary rays
 /// run 7 % faster than with leaves of at most 4, the others as fast or
 /// faster within this VM's noise (BENCHMARKS.md). A leaf of
