@@ -281,8 +281,8 @@ impl<const W: usize> Bvh<W> {
     /// The top levels have few nodes, each over many primitives: their
     /// passes over the primitives (boxes, bins) are split into pieces
     /// across `par`, their partitions stay serial. Below them, whole
-    /// subtrees are independent tasks. The dragon builds in about 140 ms on two
-    /// threads against about 190 ms on one (BENCHMARKS.md).
+    /// subtrees are independent tasks. The dragon builds in about 140 ms on
+    /// two threads against about 190 ms on one (BENCHMARKS.md).
     pub fn build_on(boxes: &[Bounds3], params: BuildParams, par: &Parallel<'_>) -> Self {
         assert!(W == 4 || W == 8, "a BVH is 4 or 8 wide");
         let centroids: Vec<Vec3> = boxes
