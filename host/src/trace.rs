@@ -431,6 +431,17 @@ struct Report<'a> {
     stats: &'a Stats,
 }
 
+/// The walk a `bvh` (8-wide, `simd = "auto"`) runs on this CPU, as the
+/// plugin decides it (the same kernel code): a timing says what it timed.
+fn cpu_simd() -> &'static str {
+    use rtk_kernel::accel::{Bvh, Simd};
+    match Bvh::<8>::best_simd() {
+        Simd::Avx512 => "avx512",
+        Simd::Avx2 => "avx2",
+        Simd::Portable => "portable",
+    }
+}
+
 impl Report<'_> {
     fn print(&self, json: bool) {
         let n_hits = self.hits.iter().filter(|h| h.t.is_finite()).count();
@@ -459,12 +470,13 @@ impl Report<'_> {
                 "hits": n_hits, "sum_t": sum_t, "sum_prim": sum_prim,
                 "node_tests_per_ray": per_ray(self.stats.node_tests),
                 "prim_tests_per_ray": per_ray(self.stats.prim_tests),
+                "cpu_simd": cpu_simd(),
             });
             println!("{j}");
         } else {
             println!(
-                "{} {} {}: {} rays (hash {}), {} threads\n  {:.2} Mrays/s ({:.3} s), {} build {:.1} ms (loading {:.1} ms), memory {:.1} MB\n  hits {}, sum_t {:.6}, sum_prim {}\n  {:.1} node tests and {:.1} primitive tests per ray",
-                self.input, self.set, self.query, self.rays, self.rays_hash, self.threads,
+                "{} {} {}: {} rays (hash {}), {} threads, cpu simd {}\n  {:.2} Mrays/s ({:.3} s), {} build {:.1} ms (loading {:.1} ms), memory {:.1} MB\n  hits {}, sum_t {:.6}, sum_prim {}\n  {:.1} node tests and {:.1} primitive tests per ray",
+                self.input, self.set, self.query, self.rays, self.rays_hash, self.threads, cpu_simd(),
                 mrays, self.seconds, self.aggregate, self.build_seconds * 1e3, self.load_seconds * 1e3,
                 self.memory_bytes as f64 / 1e6,
                 n_hits, sum_t, sum_prim,
