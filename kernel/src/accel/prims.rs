@@ -602,15 +602,24 @@ impl Primitives {
     /// entry by entry. The unpacked copy of the vertices is then dropped:
     /// the blocks hold them.
     pub fn pack(&mut self) {
-        let entries: Vec<_> = (0..self.refs.len())
-            .map(|i| {
-                let r = self.refs[i];
-                let is_tri =
-                    r != GAP && matches!(self.sources[r.child as usize], Source::Triangles);
-                (self.tris[i], r, is_tri)
+        let entry = |i: usize| {
+            let r = self.refs[i];
+            let is_tri = r != GAP && matches!(self.sources[r.child as usize], Source::Triangles);
+            (self.tris[i], r, is_tri)
+        };
+        // Block by block, each from its four entries on the stack (no
+        // table of all entries first: it was as large as the blocks).
+        let n = self.refs.len();
+        self.blocks = (0..n.div_ceil(4))
+            .map(|b| {
+                let mut four = [([[0.0; 3]; 3], GAP, false); 4];
+                let k = (n - 4 * b).min(4);
+                for (lane, e) in four[..k].iter_mut().enumerate() {
+                    *e = entry(4 * b + lane);
+                }
+                Tri4::new(&four[..k])
             })
             .collect();
-        self.blocks = entries.chunks(4).map(Tri4::new).collect();
         self.tris = Vec::new();
     }
 
