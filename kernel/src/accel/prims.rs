@@ -381,6 +381,11 @@ impl Primitives {
             let source = match child.prim_set() {
                 Some(set) => match set.triangles()? {
                     Some(t) => {
+                        // Room for all at once: growing by doubling copied
+                        // the dragon's tables about twice over.
+                        boxes.reserve(t.indices.len());
+                        p.refs.reserve(t.indices.len());
+                        p.tris.reserve(t.indices.len());
                         for (i, ix) in t.indices.iter().enumerate() {
                             let v = ix.map(|k| t.positions[k as usize]);
                             // Never hit (T3): left out of the structure.
