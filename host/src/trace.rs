@@ -434,12 +434,7 @@ struct Report<'a> {
 /// The walk a `bvh` (8-wide, `simd = "auto"`) runs on this CPU, as the
 /// plugin decides it (the same kernel code): a timing says what it timed.
 fn cpu_simd() -> &'static str {
-    use rtk_kernel::accel::{Bvh, Simd};
-    match Bvh::<8>::best_simd() {
-        Simd::Avx512 => "avx512",
-        Simd::Avx2 => "avx2",
-        Simd::Portable => "portable",
-    }
+    rtk_kernel::accel::Bvh::<8>::best_simd().name()
 }
 
 impl Report<'_> {

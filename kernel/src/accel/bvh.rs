@@ -67,6 +67,18 @@ pub enum Simd {
     Avx512,
 }
 
+impl Simd {
+    /// The name a scene gives this walk (the `bvh`'s `simd` key) and
+    /// reports print.
+    pub fn name(self) -> &'static str {
+        match self {
+            Simd::Portable => "portable",
+            Simd::Avx2 => "avx2",
+            Simd::Avx512 => "avx512",
+        }
+    }
+}
+
 /// A gap in a padded leaf order ([`Bvh4::pad_leaves`]).
 pub const PAD: u32 = u32::MAX;
 

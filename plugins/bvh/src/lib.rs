@@ -32,15 +32,6 @@ enum SimdChoice {
     Portable,
 }
 
-/// The `simd` value naming a walk.
-fn walk_name(s: Simd) -> &'static str {
-    match s {
-        Simd::Avx512 => "avx512",
-        Simd::Avx2 => "avx2",
-        Simd::Portable => "portable",
-    }
-}
-
 impl SimdChoice {
     fn simd(self) -> Simd {
         match self {
@@ -127,13 +118,13 @@ impl Plugin for BvhObject {
             let here: Vec<String> = [Simd::Avx512, Simd::Avx2, Simd::Portable]
                 .into_iter()
                 .filter(|&s| Bvh::<8>::supports(s))
-                .map(|s| format!("\"{}\"", walk_name(s)))
+                .map(|s| format!("\"{}\"", s.name()))
                 .collect();
             return Err(PluginError::key(
                 "simd",
                 format!(
                     "\"{}\" needs {}, which this CPU lacks; it runs {} (\"auto\" picks the best)",
-                    walk_name(simd),
+                    simd.name(),
                     match simd {
                         Simd::Avx512 => "AVX-512 F, VL, BW and DQ (and AVX2)",
                         _ => "AVX2, FMA, BMI1, BMI2, POPCNT and LZCNT",
