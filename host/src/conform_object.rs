@@ -183,10 +183,8 @@ fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
     match (a, b) {
         (None, None) => true,
         (Some(a), Some(b)) => {
-            let leaf = |h: &Hit| h.stack[(h.depth as usize).saturating_sub(1)].prim;
-            a.t.to_bits() == b.t.to_bits()
-                && a.stack[0].index == b.stack[0].index
-                && leaf(a) == leaf(b)
+            let leaf = |h: &Hit| h.stack[(h.depth as usize).saturating_sub(1)];
+            a.t.to_bits() == b.t.to_bits() && a.stack[0] == b.stack[0] && leaf(a) == leaf(b)
         }
         _ => false,
     }
@@ -197,7 +195,7 @@ fn show(h: &Option<Hit>) -> String {
         None => "miss".into(),
         Some(h) => {
             let path: Vec<String> = (0..h.depth as usize)
-                .map(|l| format!("({},{})", h.stack[l].index, h.stack[l].prim))
+                .map(|l| format!("({})", h.stack[l]))
                 .collect();
             format!("t {:?} {}", h.t, path.join(""))
         }
@@ -363,7 +361,7 @@ fn compare(test: &World, oracle: Option<&World>, rays: &[Ray], t: &mut Tally) ->
             // otherwise for the narrower interval (a search bracketed by
             // t_max), not a nearer surface missed. (The root's child may
             // differ: a duplicate child then answers first.)
-            let leaf = |h: &Hit| h.stack[(h.depth as usize).saturating_sub(1)].prim;
+            let leaf = |h: &Hit| h.stack[(h.depth as usize).saturating_sub(1)];
             let scale = h.t.max(extent).max(r.origin.v().abs().max_element());
             let rerounded = before.as_ref().is_some_and(|b| {
                 leaf(b) == leaf(h) && h.t - b.t <= REROUND_EPSILONS * f32::EPSILON * scale

@@ -114,9 +114,9 @@ fn hot(kind: Kind, w: &World) -> Option<String> {
             let l = w.lights.first()?;
             let p: Float3 = Vec3::new(0.3, 2.0, 1.1).into();
             let wi: Float3 = Vec3::new(0.0, 1.0, 0.0).into();
-            l.sample_li(&mut ctx, &p, &[0.3, 0.6], 0.5);
-            l.le(&mut ctx, &wi);
-            l.pdf_li(&mut ctx, &p, &wi);
+            l.sample_li(&mut ctx, p, [0.3, 0.6], 0.5);
+            l.le(&mut ctx, wi);
+            l.pdf_li(&mut ctx, p, wi);
             failure(&ctx)
         }
         Kind::Camera => {

@@ -20,9 +20,9 @@
 
 use crate::conform::{brief, note, readme_examples, unknown_key, Check, Cx, Suite};
 use anyhow::{anyhow, Result};
+use rtk_handles::{CreateArgs, Shader};
 use rtk_kernel::abi::{geom_mask, lobe, Float3, LocalGeom, ShaderModuleRef};
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::host::{CreateArgs, Shader};
 use rtk_kernel::sdk::shading::uniform_sphere;
 use rtk_kernel::{RngState, TraceCtx};
 

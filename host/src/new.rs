@@ -85,6 +85,7 @@ const SCENE: &str = include_str!("../templates/scene.toml.tmpl");
 /// The classes rtk ships (the folders of `plugins/`): a new plugin of the
 /// same name would shadow or be shadowed by one of them.
 pub(crate) const BUILTIN_CLASSES: &[&str] = &[
+    "area",
     "bicubic",
     "bvh",
     "conductor",

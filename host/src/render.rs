@@ -550,11 +550,9 @@ impl Job<'_, '_> {
                 lens: [ctx.rng.next_f32(), ctx.rng.next_f32()],
                 time: self.shutter[0] + (self.shutter[1] - self.shutter[0]) * ctx.rng.next_f32(),
             };
-            let (ray, weight) = world.camera.generate_ray(ctx, &sample);
-            let l = if ctx.failed() {
-                Color::BLACK
-            } else {
-                self.tracer.camera_li(ctx, &ray).scale(weight)
+            let l = match world.camera.generate_ray(ctx, &sample) {
+                Some(c) if !ctx.failed() => self.tracer.camera_li(ctx, &c.ray).scale(c.weight),
+                _ => Color::BLACK,
             };
             if self.failure.check(ctx) {
                 return false;

@@ -394,12 +394,11 @@ fn trace_one(
     if !world.root.intersect(ctx, &ray, hit) {
         return miss;
     }
-    let e = hit.entry(hit.depth.saturating_sub(1));
     HitRec {
         t: hit.t,
-        prim: e.prim,
-        u: e.uv[0],
-        v: e.uv[1],
+        prim: hit.at(hit.depth.saturating_sub(1)),
+        u: hit.uv[0],
+        v: hit.uv[1],
     }
 }
 

@@ -1,6 +1,7 @@
 //! `__NAME__`: an aggregate (acceleration structure). This one is the smallest
 //! correct one, an exhaustive list: replace the loops by your structure and
 //! check it with `rtk conform` and `rtk bench-aggregate __NAME__`.
+#![forbid(unsafe_code)]
 
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -76,7 +77,7 @@ impl Object for Agg {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        let i = hit.entry(level).index as usize;
+        let i = hit.at(level) as usize;
         self.children[i].local_geom(ctx, ray, hit, level + 1, mask, out);
     }
 }

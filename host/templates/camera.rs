@@ -1,5 +1,6 @@
 //! `__NAME__`: a camera, here a pinhole built on the kernel's `ViewFrame`
 //! (which reads the eye as a world position and checks the parameters).
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::camera::ViewFrame;
@@ -52,13 +53,13 @@ impl Plugin for Cam {
 
 impl Camera for Cam {
     /// `s.film` is in [0, 1]², (0, 0) at the top left; returns the ray and its weight.
-    fn generate_ray(&self, s: &CameraSample) -> (Ray, f32) {
+    fn generate_ray(&self, _ctx: &mut TraceCtx, s: &CameraSample) -> Option<CameraRay> {
         let sx = 2.0 * s.film[0] - 1.0;
         let sy = 1.0 - 2.0 * s.film[1];
         let dir = (self.forward + self.right * sx + self.up * sy).normalize();
         let mut ray = Ray::new(self.eye, dir);
         ray.time = s.time;
-        (ray, 1.0)
+        Some(CameraRay { ray, weight: 1.0 })
     }
 }
 

@@ -1,5 +1,6 @@
 //! `__NAME__`: an integrator, here the shading normal as a colour (the
 //! smallest one that traces the scene).
+#![forbid(unsafe_code)]
 
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;

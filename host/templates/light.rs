@@ -1,4 +1,5 @@
 //! `__NAME__`: a light, here a point light (intensity falling off as 1/d²).
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::serde::Deserialize;

@@ -1,5 +1,6 @@
 //! `__NAME__`: a primitive object, here a sphere intersected with the
 //! kernel's robust routines (RTG ch. 7 in f64, error-bounded hit point).
+#![forbid(unsafe_code)]
 
 use rtk_kernel::geom::{intersect_sphere_in_f64, nearest_root, sphere_point_in_f64};
 use rtk_kernel::glam::Vec3;

@@ -1,5 +1,6 @@
 //! `__NAME__`: a shader, here an ideal diffuse reflector (BRDF albedo / π)
 //! answering the material queries eval, sample and pdf.
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::{cosine_lobe_sample, cosine_pdf, same_side};

@@ -17,7 +17,7 @@
 //!
 //! The shell never links a plugin and holds no raw pointer: it knows object
 //! classes only through the kernel's host-side handles
-//! ([`rtk_kernel::host`]).
+//! ([`rtk_handles`]).
 #![deny(missing_docs)]
 // A scene error carries its origin and notes (~200 bytes); it is built once,
 // on the way out, never on a hot path, so it is not boxed.

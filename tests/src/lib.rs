@@ -151,76 +151,55 @@ pub fn other_abi_dir() -> &'static Path {
     DIR.get_or_init(|| {
         other_kernel_plugin(
             "otherabi",
-            "0.1.0",
-            Some((
-                "src/abi/values.rs",
+            None,
+            &[(
+                "abi/src/values.rs",
                 "pub generation: u32,",
                 "pub generation: u64,",
-            )),
+            )],
         )
     })
 }
 
-/// A plugin whose header says ABI 1 (the records before ABI 2).
-pub fn abi_v1_dir() -> &'static Path {
+/// A plugin whose header says ABI 2 and whose `rtk-abi` is 2.0.0: what a
+/// plugin built before Kernel v3 looks like to the loader.
+pub fn abi_v2_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        other_kernel_plugin(
-            "abiv1",
-            "0.1.0",
-            Some((
-                "src/abi/mod.rs",
-                "pub const ABI_VERSION: u32 = 2;",
-                "pub const ABI_VERSION: u32 = 1;",
-            )),
-        )
-    })
+    DIR.get_or_init(|| other_kernel_plugin("abiv2", Some("2.0.0"), &[]))
 }
 
-/// A plugin built against another kernel version (0.2.0), records unchanged.
-pub fn other_version_dir() -> &'static Path {
+/// A plugin built against a kernel whose `rtk-abi` is 3.1.0 (a later minor:
+/// entries appended, nothing changed): it loads.
+pub fn later_minor_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| other_kernel_plugin("otherversion", "0.2.0", None))
+    DIR.get_or_init(|| other_kernel_plugin("laterminor", Some("3.1.0"), &[]))
 }
 
 /// Build the panicky fixture as class `class` against a copy of `kernel/`
-/// with version `version` and one source edit.
-fn other_kernel_plugin(class: &str, version: &str, edit: Option<KernelEdit>) -> PathBuf {
+/// (every crate of it) with `rtk-abi` at `abi_version` (the ABI version is
+/// its major) and the given source edits.
+fn other_kernel_plugin(class: &str, abi_version: Option<&str>, edits: &[KernelEdit]) -> PathBuf {
     let (target, profile) = target_and_profile();
     let src = target.join("fixture-src").join(class);
     let _ = std::fs::remove_dir_all(&src);
     copy_dir(&root().join("kernel"), &src.join("kernel"));
-    if let Some((file, from, to)) = edit {
-        let path = src.join("kernel").join(file);
-        let text = std::fs::read_to_string(&path).expect("kernel source");
-        let edited = text.replacen(from, to, 1);
-        assert_ne!(text, edited, "the edit must change {file}");
-        std::fs::write(&path, edited).expect("write kernel source");
+    for (file, from, to) in edits {
+        edit_file(&src.join("kernel").join(file), from, to);
     }
-    // The copy inherits nothing from the main workspace.
-    let toml = std::fs::read_to_string(src.join("kernel/Cargo.toml")).expect("kernel toml");
-    let toml = toml
-        .replace("rust-version.workspace = true", "")
-        .replace(
-            "version.workspace = true",
-            &format!("version = \"{version}\""),
-        )
-        .replace("edition.workspace = true", "edition = \"2021\"")
-        .replace("license.workspace = true", "")
-        .replace("abi_stable.workspace = true", "abi_stable = \"0.11.3\"")
-        .replace(
-            "serde.workspace = true",
-            "serde = { version = \"1\", features = [\"derive\"] }",
-        )
-        .replace("serde_json.workspace = true", "serde_json = \"1\"")
-        .replace(
-            "serde_path_to_error.workspace = true",
-            "serde_path_to_error = \"0.1\"",
-        )
-        .replace("glam.workspace = true", "glam = \"0.30\"")
-        .replace("thiserror.workspace = true", "thiserror = \"2\"")
-        .replace("[lints]\nworkspace = true\n", "");
-    std::fs::write(src.join("kernel/Cargo.toml"), toml).expect("kernel toml");
+    if let Some(v) = abi_version {
+        edit_file(
+            &src.join("kernel/abi/Cargo.toml"),
+            "version = \"3.0.0\"",
+            &format!("version = \"{v}\""),
+        );
+    }
+    let deps = workspace_dependencies();
+    for dir in ["", "abi", "geom", "sdk", "accel", "handles"] {
+        let path = src.join("kernel").join(dir).join("Cargo.toml");
+        let toml = std::fs::read_to_string(&path).expect("kernel toml");
+        std::fs::write(&path, standalone_manifest(&toml, &deps, dir.is_empty()))
+            .expect("kernel toml");
+    }
     let plug = src.join(class);
     std::fs::create_dir_all(plug.join("src")).expect("mkdir");
     std::fs::write(
@@ -248,6 +227,69 @@ fn other_kernel_plugin(class: &str, version: &str, edit: Option<KernelEdit>) -> 
         .args(profile_args(&profile));
     run_cargo(c, &format!("the {class} fixture"));
     ftarget.join(&profile)
+}
+
+/// Replace `from` by `to` once in a file; the edit must change it.
+fn edit_file(path: &Path, from: &str, to: &str) {
+    let text = std::fs::read_to_string(path).expect("kernel source");
+    let edited = text.replacen(from, to, 1);
+    assert_ne!(text, edited, "the edit must change {}", path.display());
+    std::fs::write(path, edited).expect("write kernel source");
+}
+
+/// The main workspace's `[workspace.dependencies]`, as `name -> value` lines.
+fn workspace_dependencies() -> Vec<(String, String)> {
+    let text = std::fs::read_to_string(root().join("Cargo.toml")).expect("workspace toml");
+    let table = text
+        .split("[workspace.dependencies]")
+        .nth(1)
+        .expect("workspace dependencies")
+        .split("\n[")
+        .next()
+        .unwrap_or("");
+    table
+        .lines()
+        .filter(|l| !l.trim_start().starts_with('#'))
+        .filter_map(|l| l.split_once(" = "))
+        .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+        .collect()
+}
+
+/// A kernel crate's manifest that stands alone: the workspace's fields and
+/// dependencies written out (the copy belongs to no workspace).
+fn standalone_manifest(toml: &str, deps: &[(String, String)], facade: bool) -> String {
+    let mut out = String::new();
+    for line in toml.lines() {
+        let l = line.trim();
+        if l == "[lints]"
+            || l == "workspace = true"
+            || l.starts_with("rust-version.workspace")
+            || l.starts_with("license.workspace")
+        {
+            continue;
+        }
+        if l == "version.workspace = true" {
+            out.push_str("version = \"0.1.0\"\n");
+        } else if l == "edition.workspace = true" {
+            out.push_str("edition = \"2021\"\n");
+        } else if let Some(name) = l.strip_suffix(".workspace = true") {
+            let v = &deps
+                .iter()
+                .find(|(k, _)| k == name)
+                .expect("a workspace dependency")
+                .1;
+            let v = match v.strip_prefix("{ path = \"kernel/") {
+                Some(rest) if facade => format!("{{ path = \"{rest}"),
+                Some(rest) => format!("{{ path = \"../{rest}"),
+                None => v.clone(),
+            };
+            out.push_str(&format!("{name} = {v}\n"));
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    out
 }
 
 fn copy_dir(from: &Path, to: &Path) {

@@ -114,9 +114,7 @@ fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
         (Some(a), Some(b)) => {
             a.t.to_bits() == b.t.to_bits()
                 && a.depth == b.depth
-                && (0..a.depth as usize).all(|l| {
-                    a.stack[l].index == b.stack[l].index && a.stack[l].prim == b.stack[l].prim
-                })
+                && a.stack[..a.depth as usize] == b.stack[..b.depth as usize]
         }
         _ => false,
     }
@@ -128,7 +126,7 @@ pub(super) fn show(h: &Option<Hit>) -> String {
         None => "miss".into(),
         Some(h) => {
             let path: Vec<String> = (0..h.depth as usize)
-                .map(|l| format!("({},{})", h.stack[l].index, h.stack[l].prim))
+                .map(|l| format!("({})", h.stack[l]))
                 .collect();
             format!("t {:?} ({:#010x}) {}", h.t, h.t.to_bits(), path.join(""))
         }

@@ -323,7 +323,7 @@ fn q3(b: &mut Bench) -> Result<Vec<Line>> {
             rays += 1;
             let got = probe.nearest(&r)?;
             let want = nearest64(&balls, &r);
-            let got_i = got.map(|h| h.entry(0).index as usize);
+            let got_i = got.map(|h| h.at(0) as usize);
             if got_i != want.map(|w| w.0) {
                 mismatches += 1;
             }
@@ -357,7 +357,7 @@ fn q3(b: &mut Bench) -> Result<Vec<Line>> {
         let out = g.ng.v().as_dvec3();
         for _ in 0..per {
             let o = spawn_ray(&g, hemisphere(&mut rng, out).as_vec3(), r);
-            if probe.nearest(&o)?.is_some_and(|x| x.entry(0).index == 2) {
+            if probe.nearest(&o)?.is_some_and(|x| x.at(0) == 2) {
                 self_hits += 1;
             }
             let i = spawn_ray(&g, hemisphere(&mut rng, -out).as_vec3(), r);
@@ -403,7 +403,7 @@ fn under_marble(
         let c = balls[1].c.as_dvec3();
         let aim = DVec3::new(rho * phi.cos(), 0.0, rho * phi.sin());
         let down = ray(c, (aim - c).normalize());
-        let Some(h) = probe.nearest(&down)?.filter(|h| h.entry(0).index == 1) else {
+        let Some(h) = probe.nearest(&down)?.filter(|h| h.at(0) == 1) else {
             continue;
         };
         let g = probe.geom(&down, &h)?;
@@ -421,7 +421,7 @@ fn under_marble(
         };
         traced += 1;
         let right = match probe.nearest(&s)? {
-            Some(x) => x.entry(0).index as usize == k && (x.t as f64 - t).abs() <= T_ERROR * t,
+            Some(x) => x.at(0) as usize == k && (x.t as f64 - t).abs() <= T_ERROR * t,
             None => false,
         };
         wrong += u64::from(!right);
@@ -465,7 +465,7 @@ fn contact_shadows(
         let rho = radius * rng.next_f64().sqrt();
         let phi = std::f64::consts::TAU * rng.next_f64();
         let up = ray(DVec3::new(rho * phi.cos(), -2.0, rho * phi.sin()), DVec3::Y);
-        let Some(h) = probe.nearest(&up)?.filter(|h| h.entry(0).index == 0) else {
+        let Some(h) = probe.nearest(&up)?.filter(|h| h.at(0) == 0) else {
             missed += 1;
             continue;
         };

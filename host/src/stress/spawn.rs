@@ -41,11 +41,8 @@ pub const S4: Case = Case {
 };
 
 /// Which primitive a hit found: the (child, primitive) choice at every level.
-fn path(h: &Hit) -> Vec<(u32, u32)> {
-    h.stack[..h.depth as usize]
-        .iter()
-        .map(|e| (e.index, e.prim))
-        .collect()
+fn path(h: &Hit) -> Vec<u32> {
+    h.stack[..h.depth as usize].to_vec()
 }
 
 /// The scales of S1: (|centre|, triangle or sphere size).
@@ -355,14 +352,14 @@ fn s3(b: &mut Bench) -> Result<Vec<Line>> {
                     bad += 1;
                     continue;
                 };
-                if h.stack[0].index != 0 {
+                if h.stack[0] != 0 {
                     bad += 1;
                     continue;
                 }
                 let geo = probe.geom(&r, &h)?;
                 let s = spawn_ray(&geo, r.dir.v(), &r);
                 match probe.nearest(&s)? {
-                    Some(h2) if h2.stack[0].index == 1 => {}
+                    Some(h2) if h2.stack[0] == 1 => {}
                     _ => bad += 1,
                 }
             }
@@ -404,7 +401,7 @@ fn s3(b: &mut Bench) -> Result<Vec<Line>> {
                     bad_p += 1;
                     continue;
                 };
-                let lower = path(&h).last().is_some_and(|e| e.1 < 2);
+                let lower = path(&h).last().is_some_and(|&e| e < 2);
                 if !lower {
                     bad_p += 1;
                     continue;
@@ -412,7 +409,7 @@ fn s3(b: &mut Bench) -> Result<Vec<Line>> {
                 let geo = probe.geom(&r, &h)?;
                 let s = spawn_ray(&geo, r.dir.v(), &r);
                 match probe.nearest(&s)? {
-                    Some(h2) if path(&h2).last().is_some_and(|e| e.1 >= 2) => {}
+                    Some(h2) if path(&h2).last().is_some_and(|&e| e >= 2) => {}
                     _ => bad_p += 1,
                 }
             }

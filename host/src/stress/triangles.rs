@@ -60,7 +60,7 @@ fn bare_scene(file: &str) -> String {
 
 /// The triangle a hit names (the innermost entry of its stack).
 fn prim(h: &Hit) -> usize {
-    h.stack[h.depth as usize - 1].prim as usize
+    h.stack[h.depth as usize - 1] as usize
 }
 
 fn f64v(p: [f32; 3]) -> DVec3 {

@@ -1,9 +1,11 @@
-// An aggregate holds its children as `Child`: it has no accessor for the
-// raw record or the object pointer, and its fields are private.
+// An aggregate may read its child's record, but not call it: every entry is
+// an `unsafe extern "C" fn`, and plugin crates forbid `unsafe`.
+#![forbid(unsafe_code)]
+use rtk_kernel::{Child, Hit, Ray, TraceCtx};
+
 fn main() {
-    fn grab(c: &rtk_kernel::Child) {
-        let _record = c.object_ref();
-        let _fields = c.obj;
+    fn call(c: &Child, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit) -> bool {
+        unsafe { (c.raw_class().intersect())(c.raw_this(), ctx, ray, hit, 0) }
     }
-    let _ = grab;
+    let _ = call;
 }

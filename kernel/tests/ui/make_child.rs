@@ -1,10 +1,10 @@
-// A plugin cannot wrap a pointer of its own making as a child.
-use rtk_kernel::abi::ObjectRef;
-use rtk_kernel::{Child, InstanceData};
+// A plugin cannot wrap a record of its own making as a child.
+use rtk_kernel::abi::ChildRef;
+use rtk_kernel::Child;
 
 fn main() {
-    fn forge(r: ObjectRef) -> Child {
-        Child::new(r, InstanceData::NONE)
+    fn forge(r: ChildRef) -> Child {
+        Child::from_counted(r)
     }
     let _ = forge;
 }

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 mod bpt;
 mod patch;
@@ -41,6 +42,9 @@ struct Bicubic {
     /// patch lies in the convex hull of its control points.
     sphere: BoundSphere,
     slabs: SlabBounds,
+    /// The patches close a volume (every boundary curve shared by two
+    /// patches): only then is there an interior to be inside of.
+    closed: bool,
 }
 
 /// The f32 box around an f64 box, rounded outwards.
@@ -114,6 +118,7 @@ impl Plugin for Bicubic {
                     bounds: Bounds3::EMPTY,
                     sphere: BoundSphere::EMPTY,
                     slabs: SlabBounds::EMPTY,
+                    closed: false,
                 })
             }
             (None, Some(list)) => {
@@ -140,6 +145,7 @@ impl Plugin for Bicubic {
                     file: None,
                     origin: env.origin,
                     grid: g,
+                    closed: closed(&patches),
                     patches,
                     boxes,
                     bounds,
@@ -151,7 +157,58 @@ impl Plugin for Bicubic {
     }
 }
 
+/// Whether the patches close a volume: every boundary curve that is not
+/// collapsed to a point (a pole, as at the top of a lid) is shared, control
+/// point for control point and in either direction, by exactly two patches.
+fn closed(patches: &[patch::Patch]) -> bool {
+    use std::collections::HashMap;
+    let mut curves: HashMap<[[u64; 3]; 4], u32> = HashMap::new();
+    for p in patches {
+        for idx in [
+            [0, 1, 2, 3],
+            [12, 13, 14, 15],
+            [0, 4, 8, 12],
+            [3, 7, 11, 15],
+        ] {
+            let c = idx.map(|k| p.cp[k].map(f64::to_bits));
+            if c.iter().all(|q| *q == c[0]) {
+                continue;
+            }
+            let mut r = c;
+            r.reverse();
+            *curves.entry(c.min(r)).or_insert(0) += 1;
+        }
+    }
+    !curves.is_empty() && curves.values().all(|&n| n == 2)
+}
+
+/// Three directions unrelated to any patch layout (unit).
+const VOTERS: [[f32; 3]; 3] = [
+    [0.546_307, 0.718_221, 0.430_850],
+    [-0.691_283, 0.182_137, 0.699_155],
+    [0.214_089, -0.887_307, 0.408_428],
+];
+
 impl Bicubic {
+    /// How many times the ray from `p` along `d` crosses the surface: the
+    /// hits one after the other, each past the last (two patches meeting
+    /// at one `t` count once).
+    fn crossings(&self, p: Vec3, d: [f32; 3]) -> u32 {
+        let mut ray = Ray::new(p, d.into());
+        let mut count = 0;
+        // Bounded: a ray crosses a closed patch surface a few times.
+        for _ in 0..4 * self.patches.len() + 8 {
+            match self.nearest(&ray, 0..self.patches.len() as u32) {
+                Some((t, _, _)) => {
+                    count += 1;
+                    ray.t_min = t;
+                }
+                None => break,
+            }
+        }
+        count
+    }
+
     /// Nearest hit among `ids` (lowest id on equal t).
     fn nearest(&self, ray: &Ray, ids: impl Iterator<Item = u32>) -> Option<(f32, u32, [f32; 2])> {
         let o = ray.origin.to_array().map(f64::from);
@@ -227,6 +284,20 @@ fn read_patch_file(env: &Prepare, path: &std::path::Path) -> Result<Vec<u8>, Plu
 }
 
 impl Object for Bicubic {
+    /// Inside closed patches by the majority of three rays' parities;
+    /// open ones (Newell's teapot: its spout and handle end on the body)
+    /// have no interior.
+    fn in_interior(&self, _ctx: &mut TraceCtx, p: Vec3, _time: f32) -> Interior {
+        if !self.closed {
+            return Interior::NONE;
+        }
+        let odd = VOTERS
+            .iter()
+            .filter(|d| self.crossings(p, **d) % 2 == 1)
+            .count();
+        Interior::from_bool(odd >= 2)
+    }
+
     fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
         let Some(path) = &self.file else {
             return Ok(());
@@ -246,6 +317,7 @@ impl Object for Bicubic {
         self.boxes = boxes;
         self.bounds = bounds;
         (self.sphere, self.slabs) = volumes(&self.patches);
+        self.closed = closed(&self.patches);
         Ok(())
     }
 
@@ -273,12 +345,11 @@ impl Object for Bicubic {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        let e = hit.entry(level);
-        let patch = &self.patches[e.prim as usize];
+        let patch = &self.patches[hit.at(level) as usize];
         let o = ray.origin.to_array().map(f64::from);
         let d = ray.dir.to_array().map(f64::from);
         // The hit record keeps (u, v) in f32: polish them on this ray.
-        let (u, v) = patch.refine(o, d, e.uv[0] as f64, e.uv[1] as f64);
+        let (u, v) = patch.refine(o, d, hit.uv[0] as f64, hit.uv[1] as f64);
         let ev = patch.eval(u, v);
         let err = patch.point_error(&ev);
         // Never NaN: a patch degenerate around (u, v) faces the ray.

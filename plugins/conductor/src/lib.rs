@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::reflect_at;
@@ -62,6 +63,7 @@ impl Shader for Conductor {
             weight: self.reflectance,
             pdf: 1.0,
             lobe: LOBE,
+            eta: 1.0,
         })
     }
 

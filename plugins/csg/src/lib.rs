@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -157,6 +158,19 @@ impl Csg {
 }
 
 impl Object for Csg {
+    /// The boolean of the children's interiors; none when a child has no
+    /// interior to combine (CSG's children must be closed).
+    fn in_interior(&self, ctx: &mut TraceCtx, p: glam::Vec3, time: f32) -> Interior {
+        let [a, b] = [0, 1].map(|i| match self.children.get(i) {
+            Some(c) => c.in_interior(ctx, p, time),
+            None => Interior::NONE,
+        });
+        if a == Interior::NONE || b == Interior::NONE {
+            return Interior::NONE;
+        }
+        Interior::from_bool(self.op.inside(a.is_inside(), b.is_inside()))
+    }
+
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         if self.children.len() == 2 {
             return Err(PluginError::key(
@@ -210,13 +224,9 @@ impl Object for Csg {
         hit.stack[level as usize + 1..depth].copy_from_slice(&h.stack[level as usize + 1..depth]);
         hit.t = h.t;
         hit.depth = h.depth;
-        // Which child, and whether its normals flip (B inside A).
-        let flip = self.op == Op::Difference && c == 1;
-        hit.stack[level as usize] = HitEntry {
-            index: c as u32,
-            prim: flip as u32,
-            uv: [0.0, 0.0],
-        };
+        hit.uv = h.uv;
+        // Which child (whether its normals flip follows from it).
+        hit.record_child(level, c as u32);
         true
     }
 
@@ -229,12 +239,14 @@ impl Object for Csg {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        let e = hit.stack[level as usize];
-        let Some(c) = self.children.get(e.index as usize) else {
+        let i = hit.at(level) as usize;
+        let Some(c) = self.children.get(i) else {
             return;
         };
         c.local_geom(ctx, ray, hit, level + 1, mask, out);
-        if e.prim == 1 {
+        // A difference's second child bounds the result from inside: its
+        // normals turn outward of the result.
+        if self.op == Op::Difference && i == 1 {
             out.ng = (-out.ng.v()).into();
             out.ns = (-out.ns.v()).into();
             out.dpdv = (-out.dpdv.v()).into();

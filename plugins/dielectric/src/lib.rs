@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::{fresnel_dielectric, reflect_at, refract_at};
@@ -58,6 +59,8 @@ struct Interface {
     f: f32,
     /// Refracted direction; `None` on total internal reflection.
     t: Option<Vec3>,
+    /// Relative index of refraction across the interface (η_t/η_i).
+    eta: f32,
 }
 
 impl Dielectric {
@@ -78,16 +81,17 @@ impl Dielectric {
         } else {
             1.0
         };
-        Interface { n, f, t }
+        Interface { n, f, t, eta }
     }
 }
 
-fn delta(wi: Vec3, weight: Color, lobe: u32) -> Option<BsdfSample> {
+fn delta(wi: Vec3, weight: Color, lobe: u32, eta: f32) -> Option<BsdfSample> {
     (!weight.is_black()).then(|| BsdfSample {
         wi: wi.into(),
         weight,
         pdf: 1.0,
         lobe,
+        eta,
     })
 }
 
@@ -121,13 +125,13 @@ impl Shader for Dielectric {
         match (want_r, want_t) {
             (true, true) => {
                 if u[0] < s.f {
-                    delta(reflected(), self.kr, REFLECT)
+                    delta(reflected(), self.kr, REFLECT, 1.0)
                 } else {
-                    delta(s.t?, self.kt, TRANSMIT)
+                    delta(s.t?, self.kt, TRANSMIT, s.eta)
                 }
             }
-            (true, false) => delta(reflected(), self.kr.scale(s.f), REFLECT),
-            _ => delta(s.t?, self.kt.scale(1.0 - s.f), TRANSMIT),
+            (true, false) => delta(reflected(), self.kr.scale(s.f), REFLECT, 1.0),
+            _ => delta(s.t?, self.kt.scale(1.0 - s.f), TRANSMIT, s.eta),
         }
     }
 

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 mod terrain;
 
@@ -227,10 +228,9 @@ impl Object for Fractal {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        let e = hit.entry(level);
-        let i = e.prim as usize;
+        let i = hit.at(level) as usize;
         let v = self.tv[i];
-        let b = [1.0 - e.uv[0] - e.uv[1], e.uv[0], e.uv[1]];
+        let b = [1.0 - hit.uv[0] - hit.uv[1], hit.uv[0], hit.uv[1]];
         let (p, err) = triangle_point_inset(v, b);
         let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
         let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Y);
@@ -330,7 +330,7 @@ impl SampleSurface for Fractal {
         self.area_cdf.last().copied().unwrap_or(0.0) as f32
     }
 
-    fn sample_surface(&self, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
+    fn sample_point(&self, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
         let (i, u0) = pick_from_cdf(&self.area_cdf, u[0])?;
         let v = self.tv[i].map(Vec3::from);
         let b = uniform_triangle([u0, u[1]]);

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::accel::{Mailbox, Nearest, Primitives};
 use rtk_kernel::geom::RayBoxPrecomp;
@@ -217,6 +218,11 @@ impl Cells {
 }
 
 impl Object for Grid {
+    /// Inside any child: the union of their interiors.
+    fn in_interior(&self, ctx: &mut TraceCtx, p: rtk_kernel::glam::Vec3, time: f32) -> Interior {
+        union_interior(&self.children, ctx, p, time)
+    }
+
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         self.children.push(child);
         Ok(())

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::{cosine_lobe_sample, cosine_pdf, same_side};

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
@@ -27,6 +28,11 @@ impl Plugin for List {
 }
 
 impl Object for List {
+    /// Inside any child: the union of their interiors.
+    fn in_interior(&self, ctx: &mut TraceCtx, p: rtk_kernel::glam::Vec3, time: f32) -> Interior {
+        union_interior(&self.children, ctx, p, time)
+    }
+
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         self.children.push(child);
         Ok(())
@@ -73,7 +79,7 @@ impl Object for List {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        let i = hit.entry(level).index as usize;
+        let i = hit.at(level) as usize;
         self.children[i].local_geom(ctx, ray, hit, level + 1, mask, out);
     }
 }

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 mod load;
 mod obj;
@@ -50,6 +51,9 @@ struct Mesh {
     /// Running sum of the triangles' areas (f64, so a million small
     /// triangles add up exactly enough): area lights pick a triangle by it.
     area_cdf: Vec<f64>,
+    /// The solid the mesh bounds, when it is closed (`None` inside: open),
+    /// built at the first `in_interior` (nothing else needs it).
+    solid: std::sync::OnceLock<Option<rtk_kernel::accel::TriangleSolid>>,
 }
 
 impl Mesh {
@@ -152,11 +156,24 @@ impl Plugin for Mesh {
             tv: vec![],
             all_ids: vec![],
             area_cdf: vec![],
+            solid: std::sync::OnceLock::new(),
         })
     }
 }
 
 impl Object for Mesh {
+    /// Inside a closed mesh by the parity of rays from the point
+    /// (`TriangleSolid`); an open mesh has no interior.
+    fn in_interior(&self, _ctx: &mut TraceCtx, p: Vec3, _time: f32) -> Interior {
+        let solid = self
+            .solid
+            .get_or_init(|| rtk_kernel::accel::TriangleSolid::new(&self.p, &self.tris));
+        match solid {
+            Some(s) => Interior::from_bool(s.contains(p.to_array())),
+            None => Interior::NONE,
+        }
+    }
+
     fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
         let bytes = load::read_file(env, &self.path)?;
         let m = load::load(&self.path, &bytes)?;
@@ -239,10 +256,9 @@ impl Object for Mesh {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        let e = hit.entry(level);
-        let i = e.prim;
+        let i = hit.at(level);
         let v = self.verts(i);
-        let b = [1.0 - e.uv[0] - e.uv[1], e.uv[0], e.uv[1]];
+        let b = [1.0 - hit.uv[0] - hit.uv[1], hit.uv[0], hit.uv[1]];
         let (p, err) = triangle_point_inset(v, b);
         let (p0, p1, p2) = (Vec3::from(v[0]), Vec3::from(v[1]), Vec3::from(v[2]));
         let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
@@ -362,7 +378,7 @@ impl SampleSurface for Mesh {
         self.area_cdf.last().copied().unwrap_or(0.0) as f32
     }
 
-    fn sample_surface(&self, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
+    fn sample_point(&self, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
         let (i, u0) = pick_from_cdf(&self.area_cdf, u[0])?;
         let v = self.tv[i].map(Vec3::from);
         let b = uniform_triangle([u0, u[1]]);

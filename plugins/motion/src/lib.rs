@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::geom::{abs_mat3, gamma, placed_point_error};
 use rtk_kernel::glam::{DQuat, DVec3, Mat3, Quat, Vec3};
@@ -180,6 +181,15 @@ impl Motion {
 }
 
 impl Object for Motion {
+    /// The child's answer at the point taken into its space at `time`.
+    fn in_interior(&self, ctx: &mut TraceCtx, p: Vec3, time: f32) -> Interior {
+        let Some(c) = &self.child else {
+            return Interior::NONE;
+        };
+        let a = self.at(time);
+        c.in_interior(ctx, a.inv * p + a.inv_t, time)
+    }
+
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         if self.child.is_some() {
             return Err(PluginError::key(

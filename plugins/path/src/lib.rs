@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::geom::{spawn_ray, SHADOW_EPSILON};
 use rtk_kernel::glam::Vec3;

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::{
@@ -128,6 +129,7 @@ fn delta(wi: Vec3, weight: Color, side: u32) -> Option<BsdfSample> {
         weight,
         pdf: 1.0,
         lobe: lobe::SPECULAR | side,
+        eta: 1.0,
     })
 }
 

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::camera::ViewFrame;
@@ -121,14 +122,14 @@ impl Plugin for Pinhole {
 }
 
 impl Camera for Pinhole {
-    fn generate_ray(&self, s: &CameraSample) -> (Ray, f32) {
+    fn generate_ray(&self, _ctx: &mut TraceCtx, s: &CameraSample) -> Option<CameraRay> {
         let sx = 2.0 * s.film[0] - 1.0;
         let sy = 1.0 - 2.0 * s.film[1];
         let f = self.frame(s.time);
         let dir = (f.forward + f.right * sx + f.up * sy).normalize();
         let mut ray = Ray::new(f.eye, dir);
         ray.time = s.time;
-        (ray, 1.0)
+        Some(CameraRay { ray, weight: 1.0 })
     }
 }
 

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 mod cells;
 
@@ -144,6 +145,11 @@ impl Built {
 }
 
 impl Object for RayCls {
+    /// Inside any child: the union of their interiors.
+    fn in_interior(&self, ctx: &mut TraceCtx, p: rtk_kernel::glam::Vec3, time: f32) -> Interior {
+        union_interior(&self.children, ctx, p, time)
+    }
+
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         self.children.push(child);
         Ok(())

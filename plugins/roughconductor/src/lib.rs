@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::serde::Deserialize;
@@ -225,6 +226,7 @@ impl Shader for RoughConductor {
             weight: self.r.scale(w),
             pdf,
             lobe: LOBE,
+            eta: 1.0,
         })
     }
 

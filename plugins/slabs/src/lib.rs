@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::accel::{cull_bound, Nearest, Primitives, PAD};
 use rtk_kernel::serde::Deserialize;
@@ -521,6 +522,11 @@ fn pad_leaves(nodes: &mut [Node], order: &[u32]) -> Vec<u32> {
 }
 
 impl Object for SlabTree {
+    /// Inside any child: the union of their interiors.
+    fn in_interior(&self, ctx: &mut TraceCtx, p: rtk_kernel::glam::Vec3, time: f32) -> Interior {
+        union_interior(&self.children, ctx, p, time)
+    }
+
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         self.children.push(child);
         Ok(())

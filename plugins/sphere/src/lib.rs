@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::geom::{intersect_sphere_in_f64, nearest_root, sphere_point_in_f64};
 use rtk_kernel::glam::Vec3;
@@ -64,6 +65,13 @@ impl Plugin for Sphere {
 }
 
 impl Object for Sphere {
+    /// Inside when nearer the centre than the radius (f64: exact for every
+    /// point farther from the surface than the rounding of its inputs).
+    fn in_interior(&self, _ctx: &mut TraceCtx, p: Vec3, _time: f32) -> Interior {
+        let d2 = (p.as_dvec3() - self.c.as_dvec3()).length_squared();
+        Interior::from_bool(d2 < (self.r as f64) * (self.r as f64))
+    }
+
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
         Bounds3::new(self.c - Vec3::splat(self.r), self.c + Vec3::splat(self.r))
     }
@@ -131,7 +139,7 @@ impl SampleSurface for Sphere {
         4.0 * std::f32::consts::PI * self.r * self.r
     }
 
-    fn sample_surface(&self, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
+    fn sample_point(&self, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
         let n = rtk_kernel::sdk::shading::uniform_sphere(u);
         Some((self.c + self.r * n, n))
     }

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::camera::ViewFrame;
@@ -110,7 +111,7 @@ fn concentric_disk(u: [f32; 2]) -> (f32, f32) {
 }
 
 impl Camera for ThinLens {
-    fn generate_ray(&self, s: &CameraSample) -> (Ray, f32) {
+    fn generate_ray(&self, _ctx: &mut TraceCtx, s: &CameraSample) -> Option<CameraRay> {
         let sx = 2.0 * s.film[0] - 1.0;
         let sy = 1.0 - 2.0 * s.film[1];
         // The pinhole's direction: its point at distance `focus_distance`
@@ -126,7 +127,7 @@ impl Camera for ThinLens {
             Ray::new(origin, dir)
         };
         ray.time = s.time;
-        (ray, 1.0)
+        Some(CameraRay { ray, weight: 1.0 })
     }
 }
 
@@ -191,11 +192,17 @@ mod tests {
             let mut rng = RngState::seeded(9);
             for _ in 0..100 {
                 let film = [rng.next_f32(), rng.next_f32()];
-                let (r0, w) = c.generate_ray(&CameraSample {
-                    film,
-                    lens: [0.5, 0.5],
-                    time: 0.25,
-                });
+                let mut ctx = TraceCtx::new(0, 1, 0);
+                let CameraRay { ray: r0, weight: w } = c
+                    .generate_ray(
+                        &mut ctx,
+                        &CameraSample {
+                            film,
+                            lens: [0.5, 0.5],
+                            time: 0.25,
+                        },
+                    )
+                    .expect("a ray");
                 assert_eq!(w, 1.0);
                 assert_eq!(r0.time, 0.25);
                 let at = |r: &Ray| {
@@ -204,11 +211,17 @@ mod tests {
                 };
                 let p0 = at(&r0);
                 for _ in 0..10 {
-                    let (r, _) = c.generate_ray(&CameraSample {
-                        film,
-                        lens: [rng.next_f32(), rng.next_f32()],
-                        time: 0.0,
-                    });
+                    let r = c
+                        .generate_ray(
+                            &mut ctx,
+                            &CameraSample {
+                                film,
+                                lens: [rng.next_f32(), rng.next_f32()],
+                                time: 0.0,
+                            },
+                        )
+                        .expect("a ray")
+                        .ray;
                     assert!((r.dir.v().length() - 1.0).abs() < 1e-6);
                     let o = r.origin.v() - Vec3::new(0.0, 0.0, 5.0);
                     assert!(o.z == 0.0 && o.length() <= 0.5 + 1e-6, "{o}");

@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 mod shape;
 use rtk_kernel::geom::vec;
@@ -105,6 +106,11 @@ impl TorusObject {
 }
 
 impl Object for TorusObject {
+    /// Inside the tube: (ρ − R)² + z² < r² in the torus's frame, in f64.
+    fn in_interior(&self, _ctx: &mut TraceCtx, p: Vec3, _time: f32) -> Interior {
+        Interior::from_bool(self.torus.contains(p.to_array()))
+    }
+
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
         self.bounds
     }

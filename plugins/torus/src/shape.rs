@@ -152,6 +152,20 @@ impl<R: Real> Torus<R> {
         }
     }
 
+    /// Whether `p` lies inside the tube, decided in f64 on the distance form
+    /// (ρ − R)² + z² < r² (ρ, z: cylindrical coordinates about the axis).
+    pub fn contains(&self, p: V<R>) -> bool {
+        let d = |x: V<R>| [x[0].to_f64(), x[1].to_f64(), x[2].to_f64()];
+        let (c, w) = (d(self.c), d(self.frame[2]));
+        let f = [d(p)[0] - c[0], d(p)[1] - c[1], d(p)[2] - c[2]];
+        let z = f[0] * w[0] + f[1] * w[1] + f[2] * w[2];
+        let rho = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2] - z * z)
+            .max(0.0)
+            .sqrt();
+        let (big, small) = (self.big.to_f64(), self.small.to_f64());
+        (rho - big) * (rho - big) + z * z < small * small
+    }
+
     /// Nearest hit of `o + t d` in `(t_min, t_max)`, if any (see the module
     /// documentation for the method).
     pub fn intersect(&self, o: V<R>, d: V<R>, t_min: R, t_max: R) -> Option<R> {

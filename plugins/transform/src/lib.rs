@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+#![forbid(unsafe_code)]
 
 use rtk_kernel::geom::{abs_mat3, gamma, placed_point_error};
 use rtk_kernel::glam::{Affine3A, DAffine3, DVec3, Mat3, Vec3};
@@ -100,6 +101,15 @@ impl FromTransform for Transform {
 }
 
 impl Object for Transform {
+    /// The child's answer at the point taken into its space (with the f32
+    /// matrix rays are mapped with, so the answer agrees with `intersect`).
+    fn in_interior(&self, ctx: &mut TraceCtx, p: Vec3, time: f32) -> Interior {
+        match &self.child {
+            Some(c) => c.in_interior(ctx, self.inv.transform_point3(p), time),
+            None => Interior::NONE,
+        }
+    }
+
     fn add_child(&mut self, child: Child) -> Result<(), PluginError> {
         if self.child.is_some() {
             return Err(PluginError::key(

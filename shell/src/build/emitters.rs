@@ -1,7 +1,9 @@
 //! Area lights: every instance bound to an emitting shader (its `lobes`
-//! has [`lobe::EMISSION`]) becomes a light, sampled through its object's
-//! `sample_surface` and placed by the transforms on its path from the root
-//! (DESIGN.md §2, "the shell builds the light list").
+//! has [`lobe::EMISSION`]) becomes a light of the class
+//! [`AREA_LIGHT`](rtk_kernel::classes::AREA_LIGHT), bound to the instance's
+//! object placed by the transforms on its path from the root (DESIGN.md §2,
+//! "the shell builds the light list"). The light plugin samples the surface
+//! and knows its densities; the shell only finds and places the instances.
 //!
 //! Why each emitting instance must be reached through exactly one path: a
 //! hit tells the host which binding it found (the emitting binding's shader
@@ -10,74 +12,31 @@
 //! emitting shader on the outer instances instead.
 
 use super::objects::Builder;
+use crate::desc::Desc;
 use crate::desc::Instance;
 use crate::error::{ErrorKind, SceneError};
-use glam::{DAffine3, DMat3};
-use rtk_kernel::host::Object;
-use rtk_kernel::lobe;
+use crate::plugins::{Module, Plugin, Registry};
+use crate::tree::Origin;
+use glam::DAffine3;
+use rtk_handles::{CallError, CreateArgs, Light, Object, Shader};
+use rtk_kernel::{lobe, InstanceData};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
-/// An emitting instance, placed in the renderer's space.
+/// An emitting instance, placed in the renderer's space: what its area
+/// light is bound to.
 pub struct Emitter {
     /// The object whose surface emits (the definition's own, not its
     /// acceleration wrapper), sampled in its own space.
     pub object: Object,
+    /// The instance's bindings: its own shader id and its light.
+    pub inst: InstanceData,
     /// Own space to the renderer's space.
     pub to_world: DAffine3,
-    /// `to_world`'s linear part, inverse transposed (normals).
-    pub normal_matrix: DMat3,
-    /// |det| of `to_world`'s linear part.
-    pub abs_det: f64,
-    /// The object's surface area, own space.
-    pub area: f32,
-    /// The binding's shader id: what a hit on it reports.
-    pub shader: u32,
     /// Instance path, for messages.
     pub path: String,
-    /// For an object that lends its triangles (a mesh): the triangles in
-    /// the renderer's space, so light samples are drawn uniformly by world
-    /// area with no call into the plugin and no transform per sample.
-    pub mesh: Option<EmitterMesh>,
-}
-
-/// An emitting mesh's triangles, placed: sampled by world area.
-pub struct EmitterMesh {
-    /// Per triangle: first vertex, the two edges from it, the unit normal
-    /// (the side `local_geom`'s `ng` faces, through the transform).
-    pub tris: Vec<[[f32; 3]; 4]>,
-    /// Running sum of the triangles' world areas.
-    pub cdf: Vec<f64>,
-    /// Total world area.
-    pub area: f64,
-}
-
-impl EmitterMesh {
-    /// Place `positions`/`indices` by `m`, in f64, rounding once.
-    fn new(m: DAffine3, positions: &[[f32; 3]], indices: &[[u32; 3]]) -> Option<EmitterMesh> {
-        let flip = m.matrix3.determinant() < 0.0;
-        let mut tris = Vec::with_capacity(indices.len());
-        let mut cdf = Vec::with_capacity(indices.len());
-        let mut sum = 0.0f64;
-        for t in indices {
-            let v = t.map(|i| {
-                m.transform_point3(glam::DVec3::from(positions[i as usize].map(f64::from)))
-            });
-            let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
-            let c = e1.cross(e2);
-            let a = 0.5 * c.length();
-            // The normal as the mesh computes it, carried through M: the
-            // cross product of the placed edges, flipped by a mirroring M.
-            let n = if flip { -c } else { c }.normalize_or_zero();
-            sum += a;
-            cdf.push(sum);
-            tris.push([v[0], e1, e2, n].map(|x| x.as_vec3().to_array()));
-        }
-        (sum > 0.0 && sum.is_finite()).then_some(EmitterMesh {
-            tris,
-            cdf,
-            area: sum,
-        })
-    }
+    /// Where the instance is written, for messages.
+    pub origin: Origin,
 }
 
 impl Builder<'_> {
@@ -143,7 +102,7 @@ impl Builder<'_> {
             };
             let mut ctx = rtk_kernel::TraceCtx::new(0, 1, 0);
             let area = object
-                .sample_surface(&mut ctx, &[0.5, 0.5])
+                .sample_surface(&mut ctx, [0.5, 0.5])
                 .map_or(0.0, |s| s.area);
             if !(area > 0.0 && area.is_finite()) {
                 return Err(SceneError::invalid(
@@ -164,20 +123,12 @@ impl Builder<'_> {
                 Some(m) => DAffine3::from_translation(-glam::DVec3::from(desc.render.origin)) * m,
                 None => DAffine3::IDENTITY,
             };
-            let l = to_world.matrix3;
-            let mesh = match object.triangles() {
-                Ok(Some((p, t))) => EmitterMesh::new(to_world, &p, &t),
-                _ => None,
-            };
             out.push(Emitter {
                 object,
+                inst: data,
                 to_world,
-                normal_matrix: l.inverse().transpose(),
-                abs_det: l.determinant().abs(),
-                area,
-                shader: data.shader,
                 path: inst.path.clone(),
-                mesh,
+                origin: inst.origin.clone(),
             });
         }
         if rtk_kernel::classes::PLACE_THEIR_CHILD.contains(&od.def.class.as_str()) {
@@ -216,4 +167,75 @@ impl Builder<'_> {
         }
         Ok(false)
     }
+}
+
+/// The area lights of `emitters`, in light-id order (the ids the bindings
+/// gave them, after the scene's `first` lights): one light of class
+/// [`AREA_LIGHT`](rtk_kernel::classes::AREA_LIGHT) per emitting instance,
+/// created and bound to its object, placement and shader. The class is
+/// loaded only when the scene has an emitter.
+pub(crate) fn area_lights(
+    registry: &mut Registry,
+    desc: &Desc,
+    scene_dir: &str,
+    first: usize,
+    emitters: &[Emitter],
+    shaders: &[Shader],
+) -> Result<(Vec<Light>, Option<Arc<Plugin>>), SceneError> {
+    let Some(e0) = emitters.first() else {
+        return Ok((Vec::new(), None));
+    };
+    let class = rtk_kernel::classes::AREA_LIGHT;
+    let plugin = registry
+        .get(class)
+        .map_err(|e| super::needs::class_refused(e, class, &e0.origin, &e0.path, "shader"))?;
+    let Module::Light(module) = plugin.module else {
+        return Err(SceneError::new(
+            ErrorKind::Plugin,
+            &e0.origin,
+            &e0.path,
+            "shader",
+            format!("the plugin `{class}` is not a light"),
+        ));
+    };
+    let mut by_id: Vec<Option<&Emitter>> = vec![None; emitters.len()];
+    for e in emitters {
+        match (e.inst.light as usize).checked_sub(first) {
+            Some(k) if k < by_id.len() && by_id[k].is_none() => by_id[k] = Some(e),
+            _ => {
+                return Err(SceneError::invalid(
+                    &e.origin,
+                    &e.path,
+                    "shader",
+                    "this emitting instance's light was not numbered once (a bug in rtk)",
+                ))
+            }
+        }
+    }
+    let mut lights = Vec::with_capacity(emitters.len());
+    for e in by_id.into_iter().flatten() {
+        let failed = |err: CallError| {
+            SceneError::new(
+                ErrorKind::PluginCall,
+                &e.origin,
+                &e.path,
+                "shader",
+                format!("plugin `{class}` refused the emitting instance: {err}"),
+            )
+        };
+        let args = CreateArgs {
+            scene_dir,
+            name: &e.path,
+            image_width: desc.render.width,
+            image_height: desc.render.height,
+            origin: desc.render.origin,
+        };
+        let mut light = Light::create(module, "{}", &args).map_err(failed)?;
+        let shader = &shaders[e.inst.shader as usize];
+        light
+            .bind(&e.object, e.inst, &e.to_world, shader)
+            .map_err(failed)?;
+        lights.push(light);
+    }
+    Ok((lights, Some(plugin)))
 }

@@ -14,7 +14,7 @@ mod objects;
 mod prepare;
 mod reach;
 
-pub use emitters::{Emitter, EmitterMesh};
+pub use emitters::Emitter;
 pub use prepare::{Parallel, Sequential};
 
 use crate::desc::{Def, Desc};
@@ -23,7 +23,7 @@ use crate::file::SceneFile;
 use crate::plugins::{Module, Plugin, Registry};
 use objects::{call_error, Builder};
 use prepare::PrepareHost;
-use rtk_kernel::host::{Camera, Integrator, Light, Object, Shader};
+use rtk_handles::{Camera, Integrator, Light, Object, Shader};
 use rtk_kernel::{Bounds3, InstanceData};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -57,16 +57,11 @@ pub struct World {
     pub camera: Camera,
     /// The integrator.
     pub integrator: Integrator,
-    /// The lights the scene lists (`[lights]`).
+    /// The lights: those the scene lists (`[lights]`), then one area light
+    /// per emitting instance (the light a hit on it reports, `LocalGeom::light`).
     pub lights: Vec<Light>,
     /// Index in `lights` of the environment light, if there is one.
     pub environment: Option<usize>,
-    /// The emitting instances (area lights), after `lights` in the light
-    /// indices integrators see.
-    pub emitters: Vec<Emitter>,
-    /// For each shader id, the index in `emitters` of the instance it is
-    /// bound to (`u32::MAX` for shaders that do not emit).
-    pub emitter_of_shader: Vec<u32>,
     /// The shaders, indexed by shader id.
     pub shaders: Vec<Shader>,
     /// The plugins loaded for this scene.
@@ -162,11 +157,32 @@ fn build_world(
         prepare_by_class: std::mem::take(&mut b.prepare_by_class),
     };
     let (shaders, objects_created) = (std::mem::take(&mut b.shaders), b.objects_created);
-    let mut emitter_of_shader = vec![u32::MAX; shaders.len()];
-    for (i, e) in emitters.iter().enumerate() {
-        emitter_of_shader[e.shader as usize] = i as u32;
+    if b.area_light_count() != emitters.len() {
+        return Err(SceneError::invalid(
+            &root_inst.origin,
+            "render",
+            "root",
+            "an emitting binding has no instance to stand for (a bug in rtk)",
+        ));
     }
     drop(b);
+    let mut lights = lights;
+    let mut plugins = plugins;
+    let t2 = Instant::now();
+    let (area, area_plugin) = emitters::area_lights(
+        registry,
+        &desc,
+        &file.dir().to_string_lossy(),
+        lights.len(),
+        &emitters,
+        &shaders,
+    )?;
+    lights.extend(area);
+    plugins.extend(area_plugin);
+    let timings = Timings {
+        create: timings.create + t2.elapsed(),
+        ..timings
+    };
     Ok(World {
         desc,
         root,
@@ -176,8 +192,6 @@ fn build_world(
         integrator,
         lights,
         environment,
-        emitters,
-        emitter_of_shader,
         shaders,
         plugins,
         files_read,
@@ -262,8 +276,8 @@ fn create_def<T>(
     make: impl FnOnce(
         Module,
         &str,
-        &rtk_kernel::host::CreateArgs,
-    ) -> Option<Result<T, rtk_kernel::host::CallError>>,
+        &rtk_handles::CreateArgs,
+    ) -> Option<Result<T, rtk_handles::CallError>>,
 ) -> Result<T, SceneError> {
     let path = def.path();
     match make(b.module(&def.class), &def.params, &b.args(&path)) {

@@ -170,20 +170,29 @@ fn with_article(word: &str) -> String {
 }
 
 fn class_error(e: ClassError, n: &Need) -> SceneError {
-    let err = |msg: String| SceneError::new(ErrorKind::Plugin, &n.origin, &n.object, "class", msg);
+    class_refused(e, &n.class, &n.origin, &n.object, "class")
+}
+
+/// Why `class` could not be had, at the `key` of `object` written at `origin`.
+pub(crate) fn class_refused(
+    e: ClassError,
+    class: &str,
+    origin: &Origin,
+    object: &str,
+    key: &str,
+) -> SceneError {
+    let err = |msg: String| SceneError::new(ErrorKind::Plugin, origin, object, key, msg);
     match e {
         ClassError::BadName => err(format!(
-            "`{}` is not a class name: use a plain identifier, never a path",
-            n.class
+            "`{class}` is not a class name: use a plain identifier, never a path"
         )),
         ClassError::NotFound {
             searched,
             available,
         } => {
             let mut e = err(format!(
-                "unknown class `{}`: no {} on the plugin path",
-                n.class,
-                library_file_name(&n.class)
+                "unknown class `{class}`: no {} on the plugin path",
+                library_file_name(class)
             ))
             .note("folders searched (--plugin-path, RTK_PLUGIN_PATH, <exe>/plugins, <exe dir>):");
             for d in searched {

@@ -18,8 +18,8 @@ use crate::desc::{Def, Desc, Instance, ObjDef};
 use crate::error::{ErrorKind, SceneError};
 use crate::plugins::{Module, Registry};
 use crate::tree::Node;
+use rtk_handles::{CallError, CreateArgs, Object, ObjectBuilder, Shader};
 use rtk_kernel::abi::ObjectModuleRef;
-use rtk_kernel::host::{CallError, CreateArgs, Object, ObjectBuilder, Shader};
 use rtk_kernel::InstanceData;
 use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
@@ -47,8 +47,11 @@ pub(crate) struct Builder<'a> {
     wrapped: HashMap<(String, bool), Object>,
     shader_ids: BTreeMap<ShaderKey, u32>,
     /// Shader definitions that emit: each instance binding them gets a
-    /// shader id of its own, so a hit names its area light (emitters.rs).
+    /// shader id of its own and an area light (emitters.rs).
     emissive: std::collections::BTreeSet<String>,
+    /// The area light of each emitting binding, by its shader id: numbered
+    /// after the scene's lights, in the order the bindings are made.
+    light_of_binding: BTreeMap<u32, u32>,
     pub shaders: Vec<Shader>,
     pub objects_created: usize,
     pub create_time: Duration,
@@ -74,6 +77,7 @@ impl<'a> Builder<'a> {
             wrapped: HashMap::new(),
             shader_ids: BTreeMap::new(),
             emissive: Default::default(),
+            light_of_binding: BTreeMap::new(),
             shaders: Vec::new(),
             objects_created: 0,
             create_time: Duration::ZERO,
@@ -270,8 +274,8 @@ impl<'a> Builder<'a> {
         } else {
             ShaderKey::Plain(s.clone())
         };
-        if let Some(id) = self.shader_ids.get(&key) {
-            return Ok(InstanceData { shader: *id });
+        if let Some(&id) = self.shader_ids.get(&key) {
+            return Ok(self.binding(id));
         }
         let desc = self.desc;
         let def = &desc.shaders[s];
@@ -282,10 +286,30 @@ impl<'a> Builder<'a> {
         if emits {
             self.emissive.insert(s.clone());
             self.shader_ids.insert(own, id);
+            let light = (desc.lights.len() + self.light_of_binding.len()) as u32;
+            self.light_of_binding.insert(id, light);
         } else {
             self.shader_ids.insert(key, id);
         }
-        Ok(InstanceData { shader: id })
+        Ok(self.binding(id))
+    }
+
+    /// The bindings of shader id `id`: the shader, and its area light when it emits.
+    fn binding(&self, id: u32) -> InstanceData {
+        InstanceData {
+            shader: id,
+            light: self
+                .light_of_binding
+                .get(&id)
+                .copied()
+                .unwrap_or(rtk_kernel::NONE_ID),
+            ..InstanceData::NONE
+        }
+    }
+
+    /// Number of area lights the bindings made call for.
+    pub(crate) fn area_light_count(&self) -> usize {
+        self.light_of_binding.len()
     }
 
     fn create_shader(&mut self, def: &Def, attrs: Option<&Node>) -> Result<Shader, SceneError> {

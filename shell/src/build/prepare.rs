@@ -1,6 +1,6 @@
 //! What `prepare` calls on the host: its thread pool and the file log.
 
-use rtk_kernel::host::PrepareServices;
+use rtk_handles::PrepareServices;
 use std::sync::Mutex;
 
 /// The host's thread pool, as the shell's caller provides it.

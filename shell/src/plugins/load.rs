@@ -27,22 +27,25 @@ pub enum LoadError {
         /// The library file.
         path: PathBuf,
     },
-    /// Built against another kernel ABI or version.
+    /// Built against another ABI (another major version of `rtk-abi`).
     #[error(
-        "plugin '{class}' ({path}) was built against rtk-kernel {plugin_kernel} (ABI {plugin_abi}); \
-         this rtk uses rtk-kernel {host_kernel} (ABI {host_abi}). Rebuild the plugin against rtk-kernel {host_kernel}."
+        "plugin '{class}' ({path}) was built against ABI {plugin_abi} (rtk-abi {plugin_kernel}); \
+         this rtk uses ABI {host_abi} (rtk-abi {host_kernel}). Rebuild the plugin against rtk-kernel {kernel} (its `rtk-kernel` dependency), \
+         or use an rtk of ABI {plugin_abi}."
     )]
     Version {
         /// The class it declares.
         class: String,
         /// The library file.
         path: PathBuf,
-        /// Kernel version the plugin saw.
+        /// `rtk-abi` version the plugin was built against.
         plugin_kernel: String,
         /// ABI version the plugin saw.
         plugin_abi: u32,
-        /// This host's kernel version.
+        /// This host's `rtk-abi` version.
         host_kernel: String,
+        /// This host's `rtk-kernel` version: what to rebuild against.
+        kernel: &'static str,
         /// This host's ABI version.
         host_abi: u32,
     },
@@ -154,8 +157,9 @@ fn read_header(lib: &libloading::Library, path: &Path) -> Result<PluginHeader, L
             path: path.to_path_buf(),
             plugin_kernel: "unknown".into(),
             plugin_abi: abi,
-            host_kernel: rtk_kernel::KERNEL_VERSION.into(),
+            host_kernel: ABI_CRATE_VERSION.into(),
             host_abi: ABI_VERSION,
+            kernel: rtk_kernel::KERNEL_VERSION,
         });
     }
     // SAFETY: the header has this kernel's size and layout (unchanged since ABI 1).
@@ -170,15 +174,16 @@ fn check_header(
     expected_class: Option<&str>,
 ) -> Result<PluginKind, LoadError> {
     let class = h.class_name();
-    let plugin_kernel = h.kernel_version();
-    if h.abi_version != ABI_VERSION || !same_minor(&plugin_kernel, rtk_kernel::KERNEL_VERSION) {
+    let plugin_kernel = h.abi_crate_version();
+    if h.abi_version != ABI_VERSION || !same_major(&plugin_kernel, ABI_CRATE_VERSION) {
         return Err(LoadError::Version {
             class,
             path: path.to_path_buf(),
             plugin_kernel,
             plugin_abi: h.abi_version,
-            host_kernel: rtk_kernel::KERNEL_VERSION.into(),
+            host_kernel: ABI_CRATE_VERSION.into(),
             host_abi: ABI_VERSION,
+            kernel: rtk_kernel::KERNEL_VERSION,
         });
     }
     if h.panic_unwind != 1 {
@@ -242,9 +247,12 @@ fn init_module(path: &Path, class: String, kind: PluginKind) -> Result<Plugin, L
     })
 }
 
-fn same_minor(a: &str, b: &str) -> bool {
-    let mm = |s: &str| s.split('.').take(2).collect::<Vec<_>>().join(".");
-    mm(a) == mm(b)
+/// Plugins of one ABI load into any host of that ABI: entries appended in a
+/// later minor version are read as absent (prefix records), so only the
+/// major version of `rtk-abi` must agree.
+fn same_major(a: &str, b: &str) -> bool {
+    let major = |s: &str| s.split('.').next().unwrap_or("").to_string();
+    major(a) == major(b)
 }
 
 /// abi_stable's report runs to hundreds of lines; keep what says where the
