@@ -3,7 +3,7 @@
 //! primary, incoherent and occluded ray sets of `rtk trace`, interleaved
 //! (A, B, A, B, ...; best of N) so that a busy machine slows all alike.
 
-use crate::rays::{HitRec, RayRec};
+use crate::trace::rays::{HitRec, RayRec};
 use crate::trace::{self, RaySet};
 use anyhow::{bail, Result};
 use rtk_shell::{Parallel, World};

@@ -1,26 +1,17 @@
 //! `rtk`: render TOML scenes with plugin object classes, shaders, integrators,
 //! cameras and lights.
 
-mod analytic;
 mod bench_aggregate;
-mod checkpoint;
 mod conform;
-mod conform_camera;
-mod conform_integrator;
-mod conform_light;
-mod conform_object;
-mod conform_panics;
-mod conform_shader;
 mod converge;
-mod images;
 mod new;
-mod output;
-mod plot;
-mod rays;
 mod render;
+mod shared;
 mod stress;
 mod trace;
-mod tracer;
+
+use render::{film_file as checkpoint, render_loop, tracer};
+use shared::{images, output};
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
@@ -346,7 +337,7 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     let (w, h) = (desc.render.width, desc.render.height);
     let rect = match &a.crop {
         Some(c) => checkpoint::parse_crop(c, w, h)?,
-        None => render::Rect::full(w, h),
+        None => render_loop::Rect::full(w, h),
     };
     let mut accum = match &a.resume {
         Some(r) => {
@@ -361,7 +352,7 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
             }
             accum
         }
-        None => render::Accum::new(w, h, rect)
+        None => render_loop::Accum::new(w, h, rect)
             .map_err(|m| anyhow::anyhow!("{}: {m}", a.scene.display()))?,
     };
 
@@ -372,7 +363,7 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
     install_interrupt_handler();
     let t_render = Instant::now();
     let mut last_checkpoint = Instant::now();
-    let mut save = |acc: &render::Accum| -> Result<(), String> {
+    let mut save = |acc: &render_loop::Accum| -> Result<(), String> {
         if let Some(c) = &a.checkpoint {
             if last_checkpoint.elapsed() >= every {
                 checkpoint::write(c, &header, acc).map_err(|e| format!("{e:#}"))?;
@@ -381,7 +372,7 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
         }
         Ok(())
     };
-    let mut ctl = render::Control {
+    let mut ctl = render_loop::Control {
         progress: !a.quiet,
         // --time-limit: one sample per pixel a pass, so the render stops
         // close to the limit; otherwise spp/16, at most 16, so Ctrl-C soon
@@ -395,7 +386,7 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
         deadline: time_limit.map(|d| t_render + d),
         after_pass: &mut save,
     };
-    let end = render::render_passes(&tracer, &pool, &mut ctl, &mut accum)
+    let end = render_loop::render_passes(&tracer, &pool, &mut ctl, &mut accum)
         .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", a.scene.display()))?;
     let render_time = t_render.elapsed();
     let t_write = Instant::now();
@@ -434,7 +425,7 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
         format!("{min} to {max} of {spp} samples per pixel")
     };
     match end {
-        render::End::Interrupted => {
+        render_loop::End::Interrupted => {
             eprintln!(
                 "interrupted: wrote {} ({}x{}, {counts}){}",
                 out.display(),
@@ -447,20 +438,20 @@ fn cmd_render(a: RenderArgs, start: Instant) -> Result<()> {
             );
             std::process::exit(EXIT_INTERRUPTED);
         }
-        render::End::TimeUp => eprintln!(
+        render_loop::End::TimeUp => eprintln!(
             "time limit: wrote {} ({}x{}, {counts})",
             out.display(),
             film.width,
             film.height
         ),
-        render::End::Complete if !a.quiet => eprintln!(
+        render_loop::End::Complete if !a.quiet => eprintln!(
             "wrote {} ({}x{}, {spp} spp) in {:.2} s",
             out.display(),
             film.width,
             film.height,
             start.elapsed().as_secs_f64()
         ),
-        render::End::Complete => {}
+        render_loop::End::Complete => {}
     }
     Ok(())
 }
@@ -482,8 +473,8 @@ pub(crate) fn read_scene(
 }
 
 /// A black film of the scene's image size (allocated fallibly).
-pub(crate) fn new_film(desc: &rtk_shell::Desc, scene: &Path) -> Result<render::Film> {
-    render::Film::new(desc.render.width, desc.render.height)
+pub(crate) fn new_film(desc: &rtk_shell::Desc, scene: &Path) -> Result<render_loop::Film> {
+    render_loop::Film::new(desc.render.width, desc.render.height)
         .map_err(|m| anyhow::anyhow!("{}: {m}", scene.display()))
 }
 
@@ -504,10 +495,10 @@ pub(crate) fn render_film(
     tracer: &tracer::Tracer,
     pool: &rayon::ThreadPool,
     progress: bool,
-    film: render::Film,
+    film: render_loop::Film,
     scene: &Path,
-) -> Result<render::Film> {
-    render::render(tracer, pool, progress, film)
+) -> Result<render_loop::Film> {
+    render_loop::render(tracer, pool, progress, film)
         .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", scene.display()))
 }
 
@@ -555,7 +546,7 @@ fn stats_json(
     a: &RenderArgs,
     out: &Path,
     world: &rtk_shell::World,
-    film: &render::Film,
+    film: &render_loop::Film,
     threads: usize,
     t: &StepTimes,
 ) -> serde_json::Value {

@@ -564,7 +564,7 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<Shape> {
     suite.at("unknown-key-refused");
     let c = unknown_key(cx, shape.count());
     suite.push(c);
-    crate::conform_panics::run(cx, suite, shape.count())?;
+    super::panics::run(cx, suite, shape.count())?;
     Ok(shape)
 }
 

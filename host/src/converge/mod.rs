@@ -1,12 +1,16 @@
 //! `rtk converge`: run time against error. The scene is loaded once and
 //! rendered at each sample count with several seeds; each render is timed
 //! (the render only) and measured against a reference image or a closed-form
-//! one ([`crate::analytic`]). Writes `converge.csv`, `converge.json` (the
+//! one ([`crate::converge::analytic`]). Writes `converge.csv`, `converge.json` (the
 //! fit and the comparison) and `converge.png` (log-log RMSE against seconds).
 
-use crate::analytic::Analytic;
-use crate::images::{self, Image};
-use crate::{output, tracer};
+pub(crate) mod analytic;
+mod plot;
+
+use crate::render::tracer;
+use crate::shared::images::{self, Image};
+use crate::shared::output;
+use analytic::Analytic;
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -438,7 +442,7 @@ pub fn run(a: ConvergeArgs, pool: &rayon::ThreadPool, threads: usize) -> Result<
     );
     let png = a.out.join("converge.png");
     let ratio_ok = ratio.as_ref().and_then(|r| r.as_ref().ok());
-    let png_bytes = crate::plot::converge_png(&title, &rtk, other.as_ref(), slope, ratio_ok)?;
+    let png_bytes = plot::converge_png(&title, &rtk, other.as_ref(), slope, ratio_ok)?;
     output::write_atomically(&png, |tmp| Ok(std::fs::write(tmp, &png_bytes)?))?;
 
     let json = a.out.join("converge.json");

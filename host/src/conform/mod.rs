@@ -1,15 +1,22 @@
 //! `rtk conform PLUGIN_FILE`: the conformance suite rtk's own plugins pass,
 //! run against any plugin library, built anywhere. One suite per kind:
-//! objects and aggregates (conform_object.rs), shaders (conform_shader.rs),
-//! cameras, lights and integrators (conform_camera.rs, conform_light.rs,
-//! conform_integrator.rs); every kind also gets `unknown-key-refused` and,
-//! given `--panic-param`, `panics-reported` (conform_panics.rs). One line
-//! per check (pass, FAIL or skip); a non-zero exit on any failure.
+//! objects and aggregates (object.rs), shaders (shader.rs), cameras,
+//! lights and integrators (camera.rs, light.rs, integrator.rs); every kind
+//! also gets `unknown-key-refused` and, given `--panic-param`,
+//! `panics-reported` (panics.rs). One line per check (pass, FAIL or skip); a
+//! non-zero exit on any failure.
 //!
 //! The plugin is created with `--params` (default: none; when it refuses
 //! none, the first TOML example of its README it accepts). A failure of
 //! the plugin during a check (a refusal, a panic caught at the boundary)
 //! fails that check with the plugin's message and ends the run there.
+
+mod camera;
+mod integrator;
+mod light;
+mod object;
+mod panics;
+mod shader;
 
 use crate::stress::{header, Bench, Size};
 use anyhow::{bail, Context, Result};
@@ -431,7 +438,7 @@ pub(crate) struct Cx<'a> {
     /// --oracle-params.
     pub oracle_params: Params,
     /// --children.
-    pub children: Option<crate::conform_object::Shape>,
+    pub children: Option<object::Shape>,
     pub bench: Bench<'a>,
     pub rng: RngState,
     /// Threads queries may come from (the pool's).
@@ -615,7 +622,7 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
         children: a
             .children
             .as_deref()
-            .map(crate::conform_object::parse_children)
+            .map(object::parse_children)
             .transpose()?,
         bench,
         rng: RngState::seeded(0xC0F0),
@@ -637,17 +644,17 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
         Kind::Integrator => "integrator",
     };
     let res = match kind {
-        Kind::Object => crate::conform_object::checks(&mut cx, &mut suite).map(|shape| {
+        Kind::Object => object::checks(&mut cx, &mut suite).map(|shape| {
             if shape.is_aggregate() {
                 label = "aggregate";
             }
         }),
         Kind::Shader => shader_module
             .context("the shader's module")
-            .and_then(|m| crate::conform_shader::checks(m, &mut cx, &mut suite)),
-        Kind::Camera => crate::conform_camera::checks(&mut cx, &mut suite),
-        Kind::Light => crate::conform_light::checks(&mut cx, &mut suite),
-        Kind::Integrator => crate::conform_integrator::checks(&mut cx, &mut suite),
+            .and_then(|m| shader::checks(m, &mut cx, &mut suite)),
+        Kind::Camera => camera::checks(&mut cx, &mut suite),
+        Kind::Light => light::checks(&mut cx, &mut suite),
+        Kind::Integrator => integrator::checks(&mut cx, &mut suite),
     };
     if let Err(e) = res {
         if e.downcast_ref::<Usage>().is_some() {

@@ -23,7 +23,7 @@
 //! radiance (`normals` does not: `--skip` them).
 
 use crate::conform::{note, unknown_key, Check, Cx, Suite};
-use crate::tracer::Tracer;
+use crate::render::tracer::Tracer;
 use anyhow::{anyhow, Result};
 use rtk_kernel::abi::{Color, Hit, Ray, TraceCtx};
 use rtk_kernel::RngState;
@@ -286,6 +286,6 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
     suite.at("unknown-key-refused");
     let c = unknown_key(cx, 0);
     suite.push(c);
-    crate::conform_panics::run(cx, suite, 0)?;
+    super::panics::run(cx, suite, 0)?;
     Ok(())
 }

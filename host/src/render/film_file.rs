@@ -15,7 +15,7 @@
 //! | 4 × 4 | the rectangle held: x0, y0, x1, y1 |
 //! | 28 per pixel | row-major over the rectangle: the f64 sums of R, G, B, then the u32 sample count |
 
-use crate::render::{Accum, Rect};
+use crate::render::render_loop::{Accum, Rect};
 use anyhow::{bail, Context, Result};
 use rtk_shell::desc::render::Filter;
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -154,7 +154,7 @@ impl Header {
 
 /// Write `accum` with `header` to `path` atomically (temporary file, then rename).
 pub fn write(path: &Path, header: &Header, accum: &Accum) -> Result<()> {
-    crate::output::write_atomically(path, |tmp| {
+    crate::shared::output::write_atomically(path, |tmp| {
         let f = std::fs::File::create(tmp)?;
         let mut w = BufWriter::new(f);
         w.write_all(MAGIC)?;
@@ -302,7 +302,7 @@ pub fn parse_crop(s: &str, width: u32, height: u32) -> Result<Rect> {
 /// settings, not overlapping, covering the image) into the full image.
 pub fn merge(out: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
     let film_out = is_film_path(out);
-    crate::output::check_writable(out)?;
+    crate::shared::output::check_writable(out)?;
     let Some(first) = parts.first() else {
         bail!("rtk merge: name at least one crop file");
     };
@@ -362,7 +362,7 @@ pub fn merge(out: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
     if film_out {
         write(out, &h, &full)?;
     } else {
-        crate::output::write(&full.into_film(), out)?;
+        crate::shared::output::write(&full.into_film(), out)?;
     }
     eprintln!(
         "merged {} crops into {} ({}x{}, {} spp)",

@@ -328,6 +328,6 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
     suite.at("unknown-key-refused");
     let c = unknown_key(cx, 0);
     suite.push(c);
-    crate::conform_panics::run(cx, suite, 0)?;
+    super::panics::run(cx, suite, 0)?;
     Ok(())
 }

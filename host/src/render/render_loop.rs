@@ -10,7 +10,7 @@
 //! and the final pixel, sum × (1 / spp) — is the same f64 however the work
 //! was split into passes, runs (checkpoint and resume), crops or threads.
 
-use crate::tracer::Tracer;
+use crate::render::tracer::Tracer;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rtk_kernel::abi::*;
 use rtk_shell::desc::render::Filter;
