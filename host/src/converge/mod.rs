@@ -7,9 +7,10 @@
 pub(crate) mod analytic;
 mod plot;
 
+use crate::render::render_loop::{self, Film};
 use crate::render::tracer;
 use crate::shared::images::{self, Image};
-use crate::shared::output;
+use crate::shared::{output, scene};
 use analytic::Analytic;
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
@@ -361,7 +362,7 @@ pub fn run(a: ConvergeArgs, pool: &rayon::ThreadPool, threads: usize) -> Result<
     let analytic = a.analytic.as_deref().map(Analytic::parse).transpose()?;
     let other = a.compare.as_deref().map(read_curve).transpose()?;
 
-    let (file, desc) = crate::read_scene(&a.scene, &a.set, a.safe)?;
+    let (file, desc) = scene::read_scene(&a.scene, &a.set, a.safe)?;
     let (w, h) = (desc.render.width, desc.render.height);
     let reference = match (&analytic, &a.reference) {
         (Some(an), _) => Image::uniform(w, h, an.radiance().map(|v| v as f32)),
@@ -389,7 +390,7 @@ pub fn run(a: ConvergeArgs, pool: &rayon::ThreadPool, threads: usize) -> Result<
     };
     prepare_out(&a.out)?;
 
-    let mut world = crate::build_world(&file, desc, &a.plugin_path, pool)?;
+    let mut world = scene::build_world(&file, desc, &a.plugin_path, pool)?;
     let total = spps.len() * a.seeds as usize;
     let mut rows = Vec::with_capacity(total);
     for (i, &spp) in spps.iter().enumerate() {
@@ -397,10 +398,10 @@ pub fn run(a: ConvergeArgs, pool: &rayon::ThreadPool, threads: usize) -> Result<
             let seed = i as u64 * SEED_STRIDE + k;
             world.desc.render.spp = spp;
             world.desc.render.seed = seed;
-            let film = crate::new_film(&world.desc, &a.scene)?;
+            let film = new_film(&world.desc, &a.scene)?;
             let tracer = tracer::Tracer::new(&world);
             let t = Instant::now();
-            let film = crate::render_film(&tracer, pool, !a.quiet, film, &a.scene)?;
+            let film = render_film(&tracer, pool, !a.quiet, film, &a.scene)?;
             let seconds = t.elapsed().as_secs_f64();
             let m = images::metrics(film.pixels.as_flattened(), &reference.data);
             let row = Row {
@@ -467,6 +468,24 @@ pub fn run(a: ConvergeArgs, pool: &rayon::ThreadPool, threads: usize) -> Result<
         json.display()
     );
     Ok(())
+}
+
+/// A black film of the scene's image size (allocated fallibly).
+fn new_film(desc: &rtk_shell::Desc, scene: &Path) -> Result<Film> {
+    Film::new(desc.render.width, desc.render.height)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", scene.display()))
+}
+
+/// Render the world (its `[render]` settings: size, spp, seed) into `film`.
+fn render_film(
+    tracer: &tracer::Tracer,
+    pool: &rayon::ThreadPool,
+    progress: bool,
+    film: Film,
+    scene: &Path,
+) -> Result<Film> {
+    render_loop::render(tracer, pool, progress, film)
+        .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", scene.display()))
 }
 
 /// The CSV: the required columns first, then extras.

@@ -4,7 +4,7 @@
 
 use crate::render::render_loop::{self, Film};
 use crate::render::tracer::Tracer;
-use crate::Pool;
+use crate::shared::threads::Pool;
 use anyhow::{bail, Context, Result};
 use rtk_kernel::abi::{geom_mask, Hit, LocalGeom, Ray, TraceCtx};
 use rtk_kernel::glam::{DMat3, DVec3, Vec3};

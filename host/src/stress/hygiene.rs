@@ -578,7 +578,12 @@ fn build_file(
     let mut file = SceneFile::read(path)?;
     file.apply_overrides(sets)?;
     let desc = Desc::from_file(&file)?;
-    Ok(rtk_shell::build(&file, desc, registry, &crate::Pool(pool))?)
+    Ok(rtk_shell::build(
+        &file,
+        desc,
+        registry,
+        &crate::shared::threads::Pool(pool),
+    )?)
 }
 
 /// The catalogue's V3: every scene in scenes/ rendered small through the
