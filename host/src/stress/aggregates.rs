@@ -25,35 +25,35 @@ use rtk_shell::World;
 pub const A1: Case = Case {
     id: "A1",
     title: "axis-parallel rays, ±0 components, origins on faces/edges/corners",
-    run: a1,
+    run: axis_parallel_rays_agree_with_the_list,
 };
 
 /// docs/numerics.md A2.
 pub const A2: Case = Case {
     id: "A2",
     title: "flat leaf boxes far from the origin: no false misses",
-    run: a2,
+    run: flat_boxes_far_away_lose_no_hits,
 };
 
 /// docs/numerics.md A3.
 pub const A3: Case = Case {
     id: "A3",
     title: "every aggregate, nested, equals brute force (list)",
-    run: a3,
+    run: aggregates_match_the_list_on_random_scenes,
 };
 
 /// docs/numerics.md A4.
 pub const A4: Case = Case {
     id: "A4",
     title: "grid/octree/kd-tree DDA corner cases on a 64^3 grid",
-    run: a4,
+    run: dda_corner_cases_agree_with_the_list,
 };
 
 /// docs/numerics.md A5.
 pub const A5: Case = Case {
     id: "A5",
     title: "aggregate nested in a grid: out-of-cell hits, mailboxes",
-    run: a5,
+    run: nested_aggregates_keep_out_of_cell_hits,
 };
 
 /// Traces single rays through a world's root, as [`Probe`] does, and keeps
@@ -359,7 +359,7 @@ fn push_quad(m: &mut Mesh, lo: DVec3, u: usize, v: usize, du: f64, dv: f64) {
 /// planes, edges and corners, or outside, and run parallel to the axes with
 /// ±0 in the other components, or along face and space diagonals. The
 /// naive slab test returns NaN (0·∞) here and culls the box.
-fn a1(b: &mut Bench) -> Result<Vec<Line>> {
+fn axis_parallel_rays_agree_with_the_list(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(20_000, 300_000);
     let mut rng = RngState::seeded(0xA1);
     let mut lattice = Mesh {
@@ -467,7 +467,7 @@ fn a1(b: &mut Bench) -> Result<Vec<Line>> {
 /// for such boxes and culls them (Ize 2013). Measured twice: the kernel's
 /// slab test on each triangle's own tight box (the catalogue's metric), and
 /// every aggregate against `list`.
-fn a2(b: &mut Bench) -> Result<Vec<Line>> {
+fn flat_boxes_far_away_lose_no_hits(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(10_000, 200_000);
     let tris = 300;
     let mut rng = RngState::seeded(0xA2);
@@ -609,7 +609,7 @@ fn plane_grid() -> Mesh {
 /// next to the triangle). Nearest and any-hit
 /// answers must equal `list`'s; the primitive
 /// tests per ray, against `list`'s, guard the structures' purpose.
-fn a3(b: &mut Bench) -> Result<Vec<Line>> {
+fn aggregates_match_the_list_on_random_scenes(b: &mut Bench) -> Result<Vec<Line>> {
     let (n_soup, n_sph, n) = (b.n(2_000, 20_000), b.n(100, 500), b.n(8_000, 40_000));
     let mut rng = RngState::seeded(0xA3);
     let soup_m = soup(&mut rng, n_soup);
@@ -772,7 +772,7 @@ fn a3(b: &mut Bench) -> Result<Vec<Line>> {
 /// (integer origins and small-integer directions, so the corner is hit
 /// exactly), have one or two ±0 components, or start on the grid's boundary
 /// (t = 0 at entry). A DDA crosses at most 3·64 − 2 cells.
-fn a4(b: &mut Bench) -> Result<Vec<Line>> {
+fn dda_corner_cases_agree_with_the_list(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(12_000, 150_000);
     let mut rng = RngState::seeded(0xA4);
     let mut m = Mesh {
@@ -990,7 +990,7 @@ fn a4(b: &mut Bench) -> Result<Vec<Line>> {
 /// mailbox must not then skip the nested object for good. With a nested
 /// kd-tree (which draws one query id per entry) the entries per ray are
 /// counted: the mailbox allows at most one.
-fn a5(b: &mut Bench) -> Result<Vec<Line>> {
+fn nested_aggregates_keep_out_of_cell_hits(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(4_000, 60_000);
     let mut rng = RngState::seeded(0xA5);
     let mut defs = String::new();

@@ -16,21 +16,21 @@ use std::path::{Path, PathBuf};
 pub const V1: Case = Case {
     id: "V1",
     title: "ray intervals at their edges: open, finite, NaN-false",
-    run: v1,
+    run: ray_intervals_are_open_at_their_edges,
 };
 
 /// docs/numerics.md V2.
 pub const V2: Case = Case {
     id: "V2",
     title: "invalid scene parameters refused, naming object and key",
-    run: v2,
+    run: invalid_parameters_are_refused_naming_object_and_key,
 };
 
 /// docs/numerics.md V3.
 pub const V3: Case = Case {
     id: "V3",
     title: "no non-finite value in any example scene's render",
-    run: v3,
+    run: example_scenes_render_no_non_finite_value,
 };
 
 /// Reported hits that break rule 2: non-finite t, or t outside the open
@@ -66,7 +66,7 @@ const BALL_R: f64 = 5.0;
 /// set exactly to its t (never reported again), and shadow rays with an
 /// unnormalised direction and t_max = 1 − 1e-4 (`spawn_ray_to`) from the
 /// triangle to points on the sphere, which must not report their target.
-fn v1(b: &mut Bench) -> Result<Vec<Line>> {
+fn ray_intervals_are_open_at_their_edges(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(20_000, 200_000);
     b.write_obj(
         "triangle.obj",
@@ -501,7 +501,7 @@ fn faults() -> Vec<Fault> {
 /// The catalogue's V2: every invalid input refused when the scene is built
 /// (the base scene builds), and each error naming the object and the key,
 /// so that the user can find what to fix.
-fn v2(b: &mut Bench) -> Result<Vec<Line>> {
+fn invalid_parameters_are_refused_naming_object_and_key(b: &mut Bench) -> Result<Vec<Line>> {
     let base = Parts {
         mesh: true,
         ..Parts::default()
@@ -589,7 +589,7 @@ fn build_file(
 /// The catalogue's V3: every scene in scenes/ rendered small through the
 /// render loop; the film drops a non-finite sample and counts it, so both
 /// the dropped samples and any non-finite pixel value are counted.
-fn v3(b: &mut Bench) -> Result<Vec<Line>> {
+fn example_scenes_render_no_non_finite_value(b: &mut Bench) -> Result<Vec<Line>> {
     let (w, h) = (b.n(64, 320), b.n(48, 240));
     let dir = scenes_dir()?;
     let mut scenes: Vec<PathBuf> = std::fs::read_dir(&dir)

@@ -14,21 +14,21 @@ use rtk_kernel::RngState;
 pub const Q1: Case = Case {
     id: "Q1",
     title: "sphere far from the origin: hit/miss and t against f64",
-    run: q1,
+    run: far_spheres_hit_as_in_f64,
 };
 
 /// docs/numerics.md Q2.
 pub const Q2: Case = Case {
     id: "Q2",
     title: "tiny spheres: hit/miss and t against f64",
-    run: q2,
+    run: tiny_spheres_hit_as_in_f64,
 };
 
 /// docs/numerics.md Q3.
 pub const Q3: Case = Case {
     id: "Q3",
     title: "ground sphere R 1e6, marble and ant: bounds, self-hits",
-    run: q3,
+    run: radii_seven_orders_apart_agree_with_f64,
 };
 
 /// The largest hit/miss mismatch rate against f64 the catalogue allows for a
@@ -241,7 +241,7 @@ fn disk(b: &mut Bench, rng: &mut RngState, dist: f64, r: f64) -> Result<Vec<Line
 
 /// A unit sphere at D ∈ {10, 1e4, 1e5, 1e6} in a random direction: the
 /// textbook b² − 4ac misclassifies half the rays from D = 1e4 on.
-fn q1(b: &mut Bench) -> Result<Vec<Line>> {
+fn far_spheres_hit_as_in_f64(b: &mut Bench) -> Result<Vec<Line>> {
     let mut rng = RngState::seeded(0x51);
     let mut lines = Vec::new();
     for dist in [10.0, 1e4, 1e5, 1e6] {
@@ -252,7 +252,7 @@ fn q1(b: &mut Bench) -> Result<Vec<Line>> {
 
 /// r = 1e-4 at distances 1 and 100, r = 1e-2 at 100: r² vanishes against
 /// |f|² in the textbook form. Targets by D/r, as Q1.
-fn q2(b: &mut Bench) -> Result<Vec<Line>> {
+fn tiny_spheres_hit_as_in_f64(b: &mut Bench) -> Result<Vec<Line>> {
     let mut rng = RngState::seeded(0x52);
     let mut lines = Vec::new();
     for (dist, r) in [(1.0, 1e-4), (100.0, 1e-4), (100.0, 1e-2)] {
@@ -272,7 +272,7 @@ fn q2(b: &mut Bench) -> Result<Vec<Line>> {
 /// spawned off the ant must neither re-hit it nor stop short; rays leaving
 /// the marble's underside must meet the ground where f64 does; shadow rays
 /// near the contact point must agree with f64 visibility.
-fn q3(b: &mut Bench) -> Result<Vec<Line>> {
+fn radii_seven_orders_apart_agree_with_f64(b: &mut Bench) -> Result<Vec<Line>> {
     let balls = [
         Ball::new(DVec3::new(0.0, -1e6, 0.0), 1e6),
         Ball::new(DVec3::new(0.0, 1.0, 0.0), 1.0),

@@ -16,28 +16,28 @@ use rtk_kernel::RngState;
 pub const S1: Case = Case {
     id: "S1",
     title: "self-intersection of spawned rays across scales",
-    run: s1,
+    run: spawned_rays_never_rehit_their_surface,
 };
 
 /// docs/numerics.md S2.
 pub const S2: Case = Case {
     id: "S2",
     title: "grazing spawned rays, binned by cos θ",
-    run: s2,
+    run: grazing_spawned_rays_never_rehit_their_surface,
 };
 
 /// docs/numerics.md S3.
 pub const S3: Case = Case {
     id: "S3",
     title: "thin gaps: the offset must not jump a neighbour",
-    run: s3,
+    run: spawned_rays_cross_thin_gaps,
 };
 
 /// docs/numerics.md S4.
 pub const S4: Case = Case {
     id: "S4",
     title: "shadow rays between two surface points",
-    run: s4,
+    run: shadow_rays_between_surface_points_are_unblocked,
 };
 
 /// Which primitive a hit found: the (child, primitive) choice at every level.
@@ -102,7 +102,7 @@ fn hit_on(
 
 /// Spawned rays over the hemisphere the arriving ray came from, counted
 /// when they meet the primitive they leave.
-fn s1(b: &mut Bench) -> Result<Vec<Line>> {
+fn spawned_rays_never_rehit_their_surface(b: &mut Bench) -> Result<Vec<Line>> {
     let (tris, per) = (b.n(40, 400), b.n(25, 500));
     let mut rng = RngState::seeded(0x51);
     let mut lines = Vec::new();
@@ -221,7 +221,7 @@ fn denormal_camera(b: &mut Bench) -> Result<Line> {
 
 /// S1's triangles with directions at a fixed angle to the surface: a
 /// normal offset does not depend on it, so every bin must be clean.
-fn s2(b: &mut Bench) -> Result<Vec<Line>> {
+fn grazing_spawned_rays_never_rehit_their_surface(b: &mut Bench) -> Result<Vec<Line>> {
     let (tris, per) = (b.n(40, 400), b.n(10, 100));
     let mut rng = RngState::seeded(0x52);
     let bins = [1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1];
@@ -322,7 +322,7 @@ fn smooth_mirror(b: &mut Bench, rng: &mut RngState) -> Result<Line> {
 /// crossing the first surface outwards must meet the second. The minimum
 /// resolvable gap is the smallest g, in ulps of |p|, from which every larger
 /// gap tried is crossed correctly.
-fn s3(b: &mut Bench) -> Result<Vec<Line>> {
+fn spawned_rays_cross_thin_gaps(b: &mut Bench) -> Result<Vec<Line>> {
     let rays = b.n(300, 5000);
     let gaps_ulps = [256.0, 64.0, 32.0, 16.0, 8.0, 4.0, 2.0];
     let mut rng = RngState::seeded(0x53);
@@ -436,7 +436,7 @@ fn s3(b: &mut Bench) -> Result<Vec<Line>> {
 /// Pairs of points on the inside of a closed box (rays from inside find
 /// them, so each has its real local geometry), edge-sharing pairs
 /// included: a shadow ray between them crosses empty space.
-fn s4(b: &mut Bench) -> Result<Vec<Line>> {
+fn shadow_rays_between_surface_points_are_unblocked(b: &mut Bench) -> Result<Vec<Line>> {
     let pairs = b.n(3000, 200_000);
     let mut rng = RngState::seeded(0x54);
     let mut lines = Vec::new();

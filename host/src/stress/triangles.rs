@@ -20,28 +20,28 @@ use std::collections::HashMap;
 pub const T1: Case = Case {
     id: "T1",
     title: "shared edge: rays aimed at a quad's diagonal",
-    run: t1,
+    run: rays_at_a_shared_edge_never_leak,
 };
 
 /// docs/numerics.md T2.
 pub const T2: Case = Case {
     id: "T2",
     title: "closed mesh: every ray from inside hits",
-    run: t2,
+    run: rays_from_inside_a_closed_mesh_always_hit,
 };
 
 /// docs/numerics.md T3.
 pub const T3: Case = Case {
     id: "T3",
     title: "degenerate, needle and tiny triangles in a closed mesh",
-    run: t3,
+    run: hard_triangles_neither_leak_nor_report_degenerates,
 };
 
 /// docs/numerics.md T4.
 pub const T4: Case = Case {
     id: "T4",
     title: "huge coordinates: a finite hit or refused at build",
-    run: t4,
+    run: huge_coordinates_hit_finitely_or_are_refused,
 };
 
 /// A scene whose root is the mesh in `file`, under the shell's default
@@ -81,7 +81,7 @@ fn f64v(p: [f32; 3]) -> DVec3 {
 /// edge both triangles contain, and the tie rule picks one), but parity and
 /// all-hits users count it twice (catalogue C3); the bound of 1e-3 flags a
 /// test that accepts on both sides of an edge beyond exact collinearity.
-fn t1(b: &mut Bench) -> Result<Vec<Line>> {
+fn rays_at_a_shared_edge_never_leak(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(20_000, 400_000);
     let mut rng = RngState::seeded(0x71);
     let mut lines = Vec::new();
@@ -196,7 +196,7 @@ fn t1(b: &mut Bench) -> Result<Vec<Line>> {
 /// with the mesh at |c| = 0, 1e3, 1e5. Every ray from inside must hit (see
 /// [`leak`]). Where a vertex fan holds a nearly edge-on triangle, pbrt's
 /// `t ≤ δt → reject` leaks; rtk rechecks such hits in f64 (rule 4).
-fn t2(b: &mut Bench) -> Result<Vec<Line>> {
+fn rays_from_inside_a_closed_mesh_always_hit(b: &mut Bench) -> Result<Vec<Line>> {
     let (random, aimed) = (b.n(20_000, 200_000), b.n(20_000, 1_000_000));
     let every = b.n(4, 20);
     let mut rng = RngState::seeded(0x72);
@@ -378,7 +378,7 @@ fn hard_box(c: DVec3) -> Hard {
 /// random directions. No ray may leak (bvh or none), no hit may name a
 /// zero-area triangle, normals must be finite and unit, and nothing in the
 /// hit's record (t, p, its error, normals, tangents, uv) may be non-finite.
-fn t3(b: &mut Bench) -> Result<Vec<Line>> {
+fn hard_triangles_neither_leak_nor_report_degenerates(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(20_000, 300_000);
     let mut rng = RngState::seeded(0x73);
     let mut lines = Vec::new();
@@ -462,7 +462,7 @@ fn t3(b: &mut Bench) -> Result<Vec<Line>> {
 /// the same inputs. Rays are aimed inside the triangle (barycentrics ≥
 /// 0.01), where f32 and f64 cannot disagree about hitting. Also a closed
 /// mesh at 2²⁴, where the f32 spacing is 2, must not leak.
-fn t4(b: &mut Bench) -> Result<Vec<Line>> {
+fn huge_coordinates_hit_finitely_or_are_refused(b: &mut Bench) -> Result<Vec<Line>> {
     let per = b.n(1_000, 50_000);
     let mut rng = RngState::seeded(0x74);
     let (mut accepted, mut refused) = (0u64, 0u64);
