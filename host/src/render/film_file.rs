@@ -199,8 +199,26 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
         bail!("{}: not a regular file", path.display());
     }
     let mut r = BufReader::new(f);
+    let (header, rect) = read_header(path, &mut r, meta.len())?;
+    let want = HEADER_BYTES + rect.len() as u64 * PIXEL_BYTES;
+    if meta.len() != want {
+        bail!(
+            "{}: the film file is {} bytes, its header says {want}: truncated or damaged",
+            path.display(),
+            meta.len()
+        );
+    }
+    let mut accum = Accum::new(header.width, header.height, rect)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
+    read_pixels(path, &mut r, &header, &mut accum)?;
+    Ok((header, accum))
+}
+
+/// The header of a film file of `len` bytes and the rectangle of the image
+/// it holds, refused unless it is a film file and its values make sense.
+fn read_header(path: &Path, r: &mut impl Read, len: u64) -> Result<(Header, Rect)> {
     let mut head = [0u8; HEADER_BYTES as usize];
-    if meta.len() < HEADER_BYTES || r.read_exact(&mut head).is_err() || &head[..8] != MAGIC {
+    if len < HEADER_BYTES || r.read_exact(&mut head).is_err() || &head[..8] != MAGIC {
         bail!(
             "{} is not an rtk film file (checkpoint or crop): it does not start with {}",
             path.display(),
@@ -241,19 +259,16 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
             header.spp
         );
     }
-    let want = HEADER_BYTES + rect.len() as u64 * PIXEL_BYTES;
-    if meta.len() != want {
-        bail!(
-            "{}: the film file is {} bytes, its header says {want}: truncated or damaged",
-            path.display(),
-            meta.len()
-        );
-    }
-    let mut accum = Accum::new(header.width, header.height, rect)
-        .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
+    Ok((header, rect))
+}
+
+/// Fill `accum` with the pixels that follow the header, refusing sums that
+/// are not finite and counts above the film's spp (a damaged file).
+fn read_pixels(path: &Path, r: &mut impl Read, header: &Header, accum: &mut Accum) -> Result<()> {
     let mut px = [0u8; PIXEL_BYTES as usize];
     for (s, c) in accum.sums.iter_mut().zip(accum.counts.iter_mut()) {
-        r.read_exact(&mut px).with_context(what)?;
+        r.read_exact(&mut px)
+            .with_context(|| format!("reading the film file {}", path.display()))?;
         *s = [
             f64::from_bits(u64_at(&px, 0)),
             f64::from_bits(u64_at(&px, 8)),
@@ -275,7 +290,7 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
             );
         }
     }
-    Ok((header, accum))
+    Ok(())
 }
 
 /// Parse `--crop x0,y0,x1,y1` against the image size.
