@@ -774,7 +774,7 @@ fn master_ray(rng: &mut RngState, k: usize, soup_m: &Mesh) -> Ray {
     if d.cmpeq(Vec3::ZERO).all() {
         d = Vec3::Z;
     }
-    let t_max = if k % 7 == 0 {
+    let t_max = if k.is_multiple_of(7) {
         rng.range_f32(0.5, 10.0)
     } else {
         f32::INFINITY
@@ -971,7 +971,7 @@ fn dda_ray(rng: &mut RngState, k: usize, thin: &ThinBoxes) -> Ray {
     if d.cmpeq(Vec3::ZERO).all() {
         d = Vec3::X;
     }
-    let t_max = if k % 9 == 0 {
+    let t_max = if k.is_multiple_of(9) {
         rng.range_f32(1.0, 40.0)
     } else {
         f32::INFINITY

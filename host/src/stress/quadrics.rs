@@ -313,6 +313,9 @@ fn radii_seven_orders_apart_agree_with_f64(b: &mut Bench) -> Result<Vec<Line>> {
     Ok(lines)
 }
 
+/// Camera rays that hit the ant, with their hits.
+type AntHits = Vec<(Ray, Hit)>;
+
 /// Q3's camera rays from above and in front: at the ground within 2 of the
 /// contact point, at the marble, at the ant (the disk of 1.5r about each).
 /// Which sphere is hit must match f64; t, the point and its bound are
@@ -323,7 +326,7 @@ fn camera_rays(
     balls: &[Ball; 3],
     names: &[&str; 3],
     n: usize,
-) -> Result<(Vec<Line>, Vec<(Ray, Hit)>)> {
+) -> Result<(Vec<Line>, AntHits)> {
     let mut lines = Vec::new();
     let eye = DVec3::new(0.0, 3.0, 6.0);
     let mut tallies: [Tally; 3] = Default::default();

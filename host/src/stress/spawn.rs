@@ -138,7 +138,7 @@ fn triangle_self_hits(
     per: usize,
     size: f64,
 ) -> Result<(u64, u64)> {
-    b.write_obj("s1.obj", &m)?;
+    b.write_obj("s1.obj", m)?;
     let world = b.scene(&format!(
         "{}[objects.m]\nclass = \"mesh\"\nfile = \"s1.obj\"\n",
         header("m")
