@@ -1,6 +1,6 @@
 //! The rendering threads: one rayon pool per run, sized by `--threads`,
-//! and the same pool handed to the shell (scene building) as its
-//! [`Parallel`], so that nothing starts threads of its own.
+//! and the same pool handed to the shell as its [`Parallel`], so that
+//! building the scene and rendering it share the threads asked for.
 
 use anyhow::{bail, Context, Result};
 use rtk_shell::Parallel;
