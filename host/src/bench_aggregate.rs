@@ -3,7 +3,7 @@
 //! primary, incoherent and occluded ray sets of `rtk trace`, interleaved
 //! (A, B, A, B, ...; best of N) so that a busy machine slows all alike.
 
-use crate::rays::{HitRec, RayRec};
+use crate::trace::rays::{HitRec, RayRec};
 use crate::trace::{self, RaySet};
 use anyhow::{bail, Result};
 use rtk_shell::{Parallel, World};
@@ -99,18 +99,7 @@ pub fn run(a: BenchArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     if a.max_rays == Some(0) {
         bail!("--rays must be at least 1 (leave it out to trace all 2^20 rays of each set)");
     }
-    let mut classes = vec![a.name.clone()];
-    for c in &a.against {
-        let c = c.trim();
-        if !c.is_empty() && !classes.iter().any(|x| x == c) {
-            classes.push(c.to_string());
-        }
-    }
-    for c in &classes {
-        if !rtk_shell::plugins::is_identifier(c) {
-            bail!("`{}` is not a class name", rtk_shell::error::shown(c, 80));
-        }
-    }
+    let classes = classes_of(&a)?;
     let meshes = if a.meshes.is_empty() {
         vec![default_mesh()]
     } else {
@@ -124,42 +113,7 @@ pub fn run(a: BenchArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
         if !mesh.is_file() {
             bail!("{}: no such mesh file (--mesh FILE)", mesh.display());
         }
-        // Warm up: map the mesh, camera and integrator libraries and read the
-        // mesh once, so that the first aggregate's memory and build time do
-        // not pay for them.
-        drop(trace::build_world(
-            trace::mesh_scene(mesh, Some("list"))?,
-            vec![],
-            &a.plugin_path,
-            parallel,
-        )?);
-        let mut built = Vec::new();
-        for class in &classes {
-            let rss0 = trace::resident_bytes();
-            let t = Instant::now();
-            let file = trace::mesh_scene(mesh, Some(class))?;
-            let world = trace::build_world(file, vec![], &a.plugin_path, parallel)?;
-            let total = t.elapsed().as_secs_f64();
-            // The build is the aggregate's `prepare`; without a record of it, all loading.
-            let build_s = world
-                .timings
-                .prepare_by_class
-                .get(class)
-                .map_or(total, |d| d.as_secs_f64());
-            let memory = trace::resident_bytes().saturating_sub(rss0);
-            if world.root.class_name() != class {
-                bail!(
-                    "the root of the benchmark scene is `{}`, not `{class}`",
-                    world.root.class_name()
-                );
-            }
-            built.push(Built {
-                class: class.clone(),
-                world,
-                build_s,
-                memory,
-            });
-        }
+        let built = build_all(&a, mesh, &classes, parallel)?;
         let (lo, hi) = trace::world_box(&built[0].world, mesh)?;
         let mesh_name = mesh.file_name().map_or_else(
             || mesh.display().to_string(),
@@ -167,17 +121,7 @@ pub fn run(a: BenchArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
         );
         for (set_name, set, occluded) in SETS {
             let rays = thin(trace::generate(set, lo, hi), a.max_rays);
-            let mut best = vec![f64::INFINITY; built.len()];
-            let mut hits = vec![0usize; built.len()];
-            let mut out = vec![HitRec::MISS; rays.len()];
-            for _ in 0..a.repeats.max(1) {
-                for (i, b) in built.iter().enumerate() {
-                    let t = Instant::now();
-                    trace::trace_all(&b.world, &rays, occluded, pool, &next_query, &mut out)?;
-                    best[i] = best[i].min(t.elapsed().as_secs_f64());
-                    hits[i] = out.iter().filter(|h| h.t.is_finite()).count();
-                }
-            }
+            let (best, hits) = time_interleaved(&a, &built, &rays, occluded, pool, &next_query)?;
             for (i, b) in built.iter().enumerate() {
                 rows.push(Row {
                     mesh: mesh_name.clone(),
@@ -196,37 +140,137 @@ pub fn run(a: BenchArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     Ok(())
 }
 
-fn print(a: &BenchArgs, rows: &[Row], threads: usize) {
-    // NAME's row for the same mesh and set.
-    let ours = |r: &Row| {
-        rows.iter()
-            .find(|o| o.mesh == r.mesh && o.set == r.set && o.class == a.name)
-    };
-    if a.json {
-        let list: Vec<_> = rows
-            .iter()
-            .map(|r| {
-                let o = ours(r);
-                serde_json::json!({
-                    "mesh": r.mesh, "set": r.set, "aggregate": r.class,
-                    "build_seconds": r.build_s, "memory_bytes": r.memory,
-                    "rays": r.rays, "trace_seconds": r.best_s, "mrays_per_s": r.mrays(),
-                    "hits": r.hits,
-                    "ratio_mrays": o.map(|o| o.mrays() / r.mrays()),
-                    "ratio_build": o.map(|o| o.build_s / r.build_s),
-                    "ratio_memory": o.map(|o| o.memory as f64 / r.memory.max(1) as f64),
-                })
-            })
-            .collect();
-        println!(
-            "{}",
-            serde_json::json!({
-                "aggregate": a.name, "threads": threads, "repeats": a.repeats.max(1),
-                "rows": list,
-            })
-        );
-        return;
+/// NAME, then each `--against` class once, every one a class name.
+fn classes_of(a: &BenchArgs) -> Result<Vec<String>> {
+    let mut classes = vec![a.name.clone()];
+    for c in &a.against {
+        let c = c.trim();
+        if !c.is_empty() && !classes.iter().any(|x| x == c) {
+            classes.push(c.to_string());
+        }
     }
+    for c in &classes {
+        if !rtk_shell::plugins::is_identifier(c) {
+            bail!("`{}` is not a class name", rtk_shell::error::shown(c, 80));
+        }
+    }
+    Ok(classes)
+}
+
+/// The mesh under each class, with its build time and the memory it took.
+fn build_all(
+    a: &BenchArgs,
+    mesh: &Path,
+    classes: &[String],
+    parallel: &dyn Parallel,
+) -> Result<Vec<Built>> {
+    // Warm up: map the mesh, camera and integrator libraries and read the
+    // mesh once, so that the first aggregate's memory and build time do
+    // not pay for them.
+    drop(trace::build_world(
+        trace::mesh_scene(mesh, Some("list"))?,
+        vec![],
+        &a.plugin_path,
+        parallel,
+    )?);
+    let mut built = Vec::new();
+    for class in classes {
+        let rss0 = trace::resident_bytes();
+        let t = Instant::now();
+        let file = trace::mesh_scene(mesh, Some(class))?;
+        let world = trace::build_world(file, vec![], &a.plugin_path, parallel)?;
+        let total = t.elapsed().as_secs_f64();
+        // The build is the aggregate's `prepare`; without a record of it, all loading.
+        let build_s = world
+            .timings
+            .prepare_by_class
+            .get(class)
+            .map_or(total, |d| d.as_secs_f64());
+        let memory = trace::resident_bytes().saturating_sub(rss0);
+        if world.root.class_name() != class {
+            bail!(
+                "the root of the benchmark scene is `{}`, not `{class}`",
+                world.root.class_name()
+            );
+        }
+        built.push(Built {
+            class: class.clone(),
+            world,
+            build_s,
+            memory,
+        });
+    }
+    Ok(built)
+}
+
+/// Each aggregate's best time over `--repeats` passes of `rays`, the
+/// aggregates taking turns (A, B, A, B, ...) so that a busy machine slows
+/// all alike, and the hits of its last pass.
+fn time_interleaved(
+    a: &BenchArgs,
+    built: &[Built],
+    rays: &[RayRec],
+    occluded: bool,
+    pool: &rayon::ThreadPool,
+    next_query: &[AtomicU64],
+) -> Result<(Vec<f64>, Vec<usize>)> {
+    let mut best = vec![f64::INFINITY; built.len()];
+    let mut hits = vec![0usize; built.len()];
+    let mut out = vec![HitRec::MISS; rays.len()];
+    for _ in 0..a.repeats.max(1) {
+        for (i, b) in built.iter().enumerate() {
+            let t = Instant::now();
+            trace::trace_all(&b.world, rays, occluded, pool, next_query, &mut out)?;
+            best[i] = best[i].min(t.elapsed().as_secs_f64());
+            hits[i] = out.iter().filter(|h| h.t.is_finite()).count();
+        }
+    }
+    Ok((best, hits))
+}
+
+/// NAME's row for the same mesh and set as `r`.
+fn ours<'r>(a: &BenchArgs, rows: &'r [Row], r: &Row) -> Option<&'r Row> {
+    rows.iter()
+        .find(|o| o.mesh == r.mesh && o.set == r.set && o.class == a.name)
+}
+
+/// Print the rows: a table, or JSON with `--json`.
+fn print(a: &BenchArgs, rows: &[Row], threads: usize) {
+    if a.json {
+        print_json(a, rows, threads);
+    } else {
+        print_table(a, rows, threads);
+    }
+}
+
+/// `--json`: one object holding every row and its ratios to NAME's.
+fn print_json(a: &BenchArgs, rows: &[Row], threads: usize) {
+    let list: Vec<_> = rows
+        .iter()
+        .map(|r| {
+            let o = ours(a, rows, r);
+            serde_json::json!({
+                "mesh": r.mesh, "set": r.set, "aggregate": r.class,
+                "build_seconds": r.build_s, "memory_bytes": r.memory,
+                "rays": r.rays, "trace_seconds": r.best_s, "mrays_per_s": r.mrays(),
+                "hits": r.hits,
+                "ratio_mrays": o.map(|o| o.mrays() / r.mrays()),
+                "ratio_build": o.map(|o| o.build_s / r.build_s),
+                "ratio_memory": o.map(|o| o.memory as f64 / r.memory.max(1) as f64),
+            })
+        })
+        .collect();
+    println!(
+        "{}",
+        serde_json::json!({
+            "aggregate": a.name, "threads": threads, "repeats": a.repeats.max(1),
+            "rows": list,
+        })
+    );
+}
+
+/// The table: a line per mesh, set and aggregate, with its ratios to NAME's.
+fn print_table(a: &BenchArgs, rows: &[Row], threads: usize) {
     println!(
         "{} against {}: best of {} interleaved passes, {threads} threads; ratios are {} / the row's aggregate (Mrays/s > 1: {} is faster; build, memory < 1: {} is cheaper)",
         a.name,
@@ -251,7 +295,7 @@ fn print(a: &BenchArgs, rows: &[Row], threads: usize) {
         "x mem"
     );
     for r in rows {
-        let (rr, rb, rm) = match ours(r) {
+        let (rr, rb, rm) = match ours(a, rows, r) {
             Some(o) if r.class != a.name => (
                 format!("{:.2}", o.mrays() / r.mrays()),
                 format!("{:.2}", o.build_s / r.build_s),
@@ -259,7 +303,7 @@ fn print(a: &BenchArgs, rows: &[Row], threads: usize) {
             ),
             _ => ("-".into(), "-".into(), "-".into()),
         };
-        let mismatch = match ours(r) {
+        let mismatch = match ours(a, rows, r) {
             Some(o) if o.hits != r.hits => "  (hits differ!)",
             _ => "",
         };

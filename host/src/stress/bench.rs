@@ -2,9 +2,9 @@
 //! text through the shell, meshes written exactly, a probe that traces
 //! through the world's root, and renders through the real render loop.
 
-use crate::render::{self, Film};
-use crate::tracer::Tracer;
-use crate::Pool;
+use crate::render::render_loop::{self, Film};
+use crate::render::tracer::Tracer;
+use crate::shared::threads::Pool;
 use anyhow::{bail, Context, Result};
 use rtk_kernel::abi::{geom_mask, Hit, LocalGeom, Ray, TraceCtx};
 use rtk_kernel::glam::{DMat3, DVec3, Vec3};
@@ -174,7 +174,7 @@ impl<'p> Bench<'p> {
         let r = &world.desc.render;
         let film = Film::new(r.width, r.height).map_err(anyhow::Error::msg)?;
         let tracer = Tracer::new(world);
-        render::render(&tracer, self.pool, false, film).map_err(anyhow::Error::msg)
+        render_loop::render(&tracer, self.pool, false, film).map_err(anyhow::Error::msg)
     }
 }
 

@@ -16,21 +16,21 @@ use std::path::{Path, PathBuf};
 pub const V1: Case = Case {
     id: "V1",
     title: "ray intervals at their edges: open, finite, NaN-false",
-    run: v1,
+    run: ray_intervals_are_open_at_their_edges,
 };
 
 /// docs/numerics.md V2.
 pub const V2: Case = Case {
     id: "V2",
     title: "invalid scene parameters refused, naming object and key",
-    run: v2,
+    run: invalid_parameters_are_refused_naming_object_and_key,
 };
 
 /// docs/numerics.md V3.
 pub const V3: Case = Case {
     id: "V3",
     title: "no non-finite value in any example scene's render",
-    run: v3,
+    run: example_scenes_render_no_non_finite_value,
 };
 
 /// Reported hits that break rule 2: non-finite t, or t outside the open
@@ -66,7 +66,7 @@ const BALL_R: f64 = 5.0;
 /// set exactly to its t (never reported again), and shadow rays with an
 /// unnormalised direction and t_max = 1 − 1e-4 (`spawn_ray_to`) from the
 /// triangle to points on the sphere, which must not report their target.
-fn v1(b: &mut Bench) -> Result<Vec<Line>> {
+fn ray_intervals_are_open_at_their_edges(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(20_000, 200_000);
     b.write_obj(
         "triangle.obj",
@@ -97,100 +97,24 @@ fn v1(b: &mut Bench) -> Result<Vec<Line>> {
              [objects.world]\nclass = \"list\"\nchildren = [{root}]\n",
             header("world")
         ))?;
-        let mut probe = Probe::new(&world);
-        let mut iv = Interval::default();
-        // Where the object is, in the world, for aiming rays at it.
-        let (centre, size) = match name {
-            "triangle" => (DVec3::ZERO, 4.0),
-            "sphere" => (DVec3::from(BALL_C), BALL_R),
-            _ => {
-                let m = DAffine3::from_translation(DVec3::new(-7.5, 3.25, 100.0))
-                    * DAffine3::from_axis_angle(
-                        DVec3::new(1.0, 2.0, 3.0).normalize(),
-                        40f64.to_radians(),
-                    );
-                (m.transform_point3(DVec3::from(BALL_C)), BALL_R)
-            }
+        let (centre, size) = where_v1_object_is(name);
+        let mut o = Traced {
+            name,
+            probe: Probe::new(&world),
+            iv: Interval::default(),
+            centre,
+            size,
         };
-
         // Origins exactly on the surface (untransformed objects only: under
         // a transform no f32 point lies exactly on the surface).
-        let mut self_hits = 0u64;
         if name != "moved sphere" {
-            for _ in 0..n {
-                let (o, normal) = if name == "triangle" {
-                    // Points of a 1/8 grid inside the triangle, in its plane.
-                    let (x, y) = loop {
-                        let x = (rng.next_f64() * 64.0 - 32.0).round() / 8.0;
-                        let y = (rng.next_f64() * 64.0 - 32.0).round() / 8.0;
-                        if y > -4.0 && y < 4.0 - 2.0 * x.abs() {
-                            break (x, y);
-                        }
-                    };
-                    (DVec3::new(x, y, 0.0), DVec3::Z)
-                } else {
-                    let k = on_sphere(&mut rng);
-                    (DVec3::from(BALL_C) + k, k / BALL_R)
-                };
-                let d = unit_vector(&mut rng);
-                let r = ray(o, d);
-                let got = iv.check(&r, probe.nearest(&r)?);
-                let outward = d.dot(normal) > 0.0;
-                if name == "triangle" || outward {
-                    // Leaving a plane or a convex surface: nothing to hit.
-                    self_hits += u64::from(got.is_some());
-                } else {
-                    // Into the sphere: the far side, at the f64 chord.
-                    let chord = intersect_sphere(BALL_C, BALL_R, r.origin.v().as_dvec3().to_array(), r.dir.v().as_dvec3().to_array())
-                        .and_then(|h| nearest_root(&h, 0.0, f64::INFINITY));
-                    // A hit at t ≈ 0 is the origin itself. A near-tangent
-                    // ray dips nanometres deep: chords below 1e-2 r (depth
-                    // 1.25e-5 r) lie in the discriminant's error band (a few
-                    // ε r deep), so only longer ones must not be lost.
-                    let bad = match (got, chord) {
-                        (Some(h), Some(t)) => h.t as f64 <= 1e-3 * t,
-                        (Some(h), None) => h.t as f64 <= 1e-6 * BALL_R,
-                        (None, Some(t)) => t >= 1e-2 * BALL_R,
-                        (None, None) => false,
-                    };
-                    self_hits += u64::from(bad);
-                }
-            }
             lines.push(Line::count(
                 format!("{name}: origin on it, t_min 0"),
                 "self-hits or lost far side",
-                self_hits,
+                o.origins_on_the_surface(&mut rng, n)?,
             ));
         }
-
-        // Rays from outside at the object: t_max = ∞ and f32::MAX agree; a
-        // hit is never reported again with t_max or t_min set to its t.
-        let (mut differ, mut repeated) = (0u64, 0u64);
-        for _ in 0..n {
-            let o = centre + unit_vector(&mut rng) * (size * 4.0);
-            let aim = centre + unit_vector(&mut rng) * (size * rng.next_f64());
-            let r = ray(o, aim - o);
-            let inf = iv.check(&r, probe.nearest(&r)?);
-            let max = Ray {
-                t_max: f32::MAX,
-                ..r
-            };
-            let fin = iv.check(&max, probe.nearest(&max)?);
-            if inf.map(|h| h.t.to_bits()) != fin.map(|h| h.t.to_bits()) {
-                differ += 1;
-            }
-            let Some(h) = inf else { continue };
-            let below = Ray { t_max: h.t, ..r };
-            let above = Ray { t_min: h.t, ..r };
-            for q in [below, above] {
-                if iv
-                    .check(&q, probe.nearest(&q)?)
-                    .is_some_and(|x| x.t == h.t)
-                {
-                    repeated += 1;
-                }
-            }
-        }
+        let (differ, repeated) = o.rays_at_the_interval_edges(&mut rng, n)?;
         lines.push(Line::count(
             format!("{name}: t_max inf vs f32::MAX"),
             "different answers",
@@ -201,44 +125,14 @@ fn v1(b: &mut Bench) -> Result<Vec<Line>> {
             "hit reported again",
             repeated,
         ));
-
-        // Shadow rays from the triangle's plane (z = 0 below the sphere)
-        // to points on the sphere's near side.
         if name != "triangle" {
-            let mut reported = 0u64;
-            let floor = b.scene(&format!(
-                "{}[objects.tri]\nclass = \"mesh\"\nfile = \"triangle.obj\"\n\
-                 [objects.world]\nclass = \"list\"\nchildren = [\"tri\"]\n",
-                header("world")
-            ))?;
-            let mut floor_probe = Probe::new(&floor);
-            for _ in 0..n {
-                // A point of the triangle, seen from below.
-                let p = DVec3::new(rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0, 0.0);
-                let up = ray(p - DVec3::Z, DVec3::Z);
-                let Some(fh) = floor_probe.nearest(&up)? else {
-                    continue;
-                };
-                let fg = floor_probe.geom(&up, &fh)?;
-                // The first point of the sphere towards a random aim.
-                let aim = centre + unit_vector(&mut rng) * (size * rng.next_f64());
-                let look = ray(p, aim - p);
-                let Some(bh) = probe.nearest(&look)? else {
-                    continue;
-                };
-                let target = probe.geom(&look, &bh)?.p.v();
-                let s = spawn_ray_to(&fg, target, &up);
-                let got = iv.check(&s, probe.nearest(&s)?);
-                if got.is_some() || probe.occluded(&s)? {
-                    reported += 1;
-                }
-            }
             lines.push(Line::count(
                 format!("{name}: shadow rays, t_max 1-1e-4"),
                 "target reported",
-                reported,
+                o.shadow_rays_from_the_triangle(b, &mut rng, n)?,
             ));
         }
+        let iv = &o.iv;
         lines.push(Line::count(format!("{name}: all rays"), "non-finite t", iv.non_finite));
         lines.push(Line::count(
             format!("{name}: all rays"),
@@ -247,6 +141,165 @@ fn v1(b: &mut Bench) -> Result<Vec<Line>> {
         ));
     }
     Ok(lines)
+}
+
+/// Where V1's object `name` is in the world, for aiming rays at it: its
+/// centre and size.
+fn where_v1_object_is(name: &str) -> (DVec3, f64) {
+    match name {
+        "triangle" => (DVec3::ZERO, 4.0),
+        "sphere" => (DVec3::from(BALL_C), BALL_R),
+        _ => {
+            let m = DAffine3::from_translation(DVec3::new(-7.5, 3.25, 100.0))
+                * DAffine3::from_axis_angle(
+                    DVec3::new(1.0, 2.0, 3.0).normalize(),
+                    40f64.to_radians(),
+                );
+            (m.transform_point3(DVec3::from(BALL_C)), BALL_R)
+        }
+    }
+}
+
+/// One of V1's objects, traced alone, with the interval breaches of every
+/// hit it reports.
+struct Traced<'w> {
+    name: &'static str,
+    probe: Probe<'w>,
+    iv: Interval,
+    centre: DVec3,
+    size: f64,
+}
+
+impl Traced<'_> {
+    /// Rays from points exactly on the surface, t_min = 0: those leaving a
+    /// plane or a convex surface must hit nothing, those into the sphere
+    /// its far side at the f64 chord. Returns the failures.
+    fn origins_on_the_surface(&mut self, rng: &mut RngState, n: usize) -> Result<u64> {
+        let mut self_hits = 0u64;
+        for _ in 0..n {
+            let (o, normal) = if self.name == "triangle" {
+                // Points of a 1/8 grid inside the triangle, in its plane.
+                let (x, y) = loop {
+                    let x = (rng.next_f64() * 64.0 - 32.0).round() / 8.0;
+                    let y = (rng.next_f64() * 64.0 - 32.0).round() / 8.0;
+                    if y > -4.0 && y < 4.0 - 2.0 * x.abs() {
+                        break (x, y);
+                    }
+                };
+                (DVec3::new(x, y, 0.0), DVec3::Z)
+            } else {
+                let k = on_sphere(rng);
+                (DVec3::from(BALL_C) + k, k / BALL_R)
+            };
+            let d = unit_vector(rng);
+            let r = ray(o, d);
+            let got = self.iv.check(&r, self.probe.nearest(&r)?);
+            let outward = d.dot(normal) > 0.0;
+            if self.name == "triangle" || outward {
+                // Leaving a plane or a convex surface: nothing to hit.
+                self_hits += u64::from(got.is_some());
+            } else {
+                self_hits += u64::from(far_side_lost(&r, got));
+            }
+        }
+        Ok(self_hits)
+    }
+
+    /// Rays from outside at the object: t_max = ∞ and f32::MAX must agree,
+    /// and a hit is never reported again with t_max or t_min set to its t.
+    /// Returns (differing answers, hits reported again).
+    fn rays_at_the_interval_edges(&mut self, rng: &mut RngState, n: usize) -> Result<(u64, u64)> {
+        let (mut differ, mut repeated) = (0u64, 0u64);
+        for _ in 0..n {
+            let o = self.centre + unit_vector(rng) * (self.size * 4.0);
+            let aim = self.centre + unit_vector(rng) * (self.size * rng.next_f64());
+            let r = ray(o, aim - o);
+            let inf = self.iv.check(&r, self.probe.nearest(&r)?);
+            let max = Ray {
+                t_max: f32::MAX,
+                ..r
+            };
+            let fin = self.iv.check(&max, self.probe.nearest(&max)?);
+            if inf.map(|h| h.t.to_bits()) != fin.map(|h| h.t.to_bits()) {
+                differ += 1;
+            }
+            let Some(h) = inf else { continue };
+            let below = Ray { t_max: h.t, ..r };
+            let above = Ray { t_min: h.t, ..r };
+            for q in [below, above] {
+                if self
+                    .iv
+                    .check(&q, self.probe.nearest(&q)?)
+                    .is_some_and(|x| x.t == h.t)
+                {
+                    repeated += 1;
+                }
+            }
+        }
+        Ok((differ, repeated))
+    }
+
+    /// Shadow rays from the triangle's plane (z = 0 below the sphere) to
+    /// points on the sphere's near side (`spawn_ray_to`): the target must
+    /// not be reported. Returns how often it was.
+    fn shadow_rays_from_the_triangle(
+        &mut self,
+        b: &mut Bench,
+        rng: &mut RngState,
+        n: usize,
+    ) -> Result<u64> {
+        let mut reported = 0u64;
+        let floor = b.scene(&format!(
+            "{}[objects.tri]\nclass = \"mesh\"\nfile = \"triangle.obj\"\n\
+             [objects.world]\nclass = \"list\"\nchildren = [\"tri\"]\n",
+            header("world")
+        ))?;
+        let mut floor_probe = Probe::new(&floor);
+        for _ in 0..n {
+            // A point of the triangle, seen from below.
+            let p = DVec3::new(rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0, 0.0);
+            let up = ray(p - DVec3::Z, DVec3::Z);
+            let Some(fh) = floor_probe.nearest(&up)? else {
+                continue;
+            };
+            let fg = floor_probe.geom(&up, &fh)?;
+            // The first point of the sphere towards a random aim.
+            let aim = self.centre + unit_vector(rng) * (self.size * rng.next_f64());
+            let look = ray(p, aim - p);
+            let Some(bh) = self.probe.nearest(&look)? else {
+                continue;
+            };
+            let target = self.probe.geom(&look, &bh)?.p.v();
+            let s = spawn_ray_to(&fg, target, &up);
+            let got = self.iv.check(&s, self.probe.nearest(&s)?);
+            if got.is_some() || self.probe.occluded(&s)? {
+                reported += 1;
+            }
+        }
+        Ok(reported)
+    }
+}
+
+/// Whether `got`, for a ray from the sphere's surface into it, misses the
+/// far side at the f64 chord.
+fn far_side_lost(r: &Ray, got: Option<Hit>) -> bool {
+    let chord = intersect_sphere(
+        BALL_C,
+        BALL_R,
+        r.origin.v().as_dvec3().to_array(),
+        r.dir.v().as_dvec3().to_array(),
+    )
+    .and_then(|h| nearest_root(&h, 0.0, f64::INFINITY));
+    // A hit at t ≈ 0 is the origin itself. A near-tangent
+    // ray dips nanometres deep: chords below 1e-2 r (depth
+    // 1.25e-5 r) lie in the discriminant's error band (a few
+    // ε r deep), so only longer ones must not be lost.
+    match (got, chord) {
+        (Some(h), Some(t)) => h.t as f64 <= 1e-3 * t,
+        (Some(h), None) => h.t as f64 <= 1e-6 * BALL_R,
+        (None, Some(t)) => t >= 1e-2 * BALL_R,
+        (None, None) => false,
+    }
 }
 
 /// A random point of the radius-5 sphere about the origin that is exact in
@@ -342,19 +395,38 @@ struct Fault {
 /// The catalogue's V2 faults, one scene each. Motion time ranges and
 /// emission are absent: rtk has no motion blur and no emitters but lights.
 fn faults() -> Vec<Fault> {
-    let mut v = Vec::new();
     let base = Parts::default();
-    let mut add = |what: &str, object: &'static str, key: &'static str, f: &dyn Fn(&mut Parts)| {
-        let mut parts = base.clone();
-        f(&mut parts);
-        v.push(Fault {
-            what: what.into(),
-            parts,
-            obj: None,
-            object,
-            key,
-        });
-    };
+    let mut v = Vec::new();
+    sphere_and_transform_faults(&mut v, &base);
+    camera_and_light_faults(&mut v, &base);
+    shader_and_render_faults(&mut v, &base);
+    mesh_faults(&mut v, &base);
+    v
+}
+
+/// Add the fault `what`: the base scene changed by `f`, whose error must
+/// name `object` and `key`.
+fn add(
+    v: &mut Vec<Fault>,
+    base: &Parts,
+    what: &str,
+    object: &'static str,
+    key: &'static str,
+    f: &dyn Fn(&mut Parts),
+) {
+    let mut parts = base.clone();
+    f(&mut parts);
+    v.push(Fault {
+        what: what.into(),
+        parts,
+        obj: None,
+        object,
+        key,
+    });
+}
+
+/// A sphere's radius and centre, an instance's transform.
+fn sphere_and_transform_faults(v: &mut Vec<Fault>, base: &Parts) {
     for (what, r) in [
         ("radius nan", "nan"),
         ("radius inf", "inf"),
@@ -362,7 +434,7 @@ fn faults() -> Vec<Fault> {
         ("radius -1", "-1.0"),
         ("radius 1e-40", "1e-40"),
     ] {
-        add(what, "objects.ball", "radius", &|p| {
+        add(v, base, what, "objects.ball", "radius", &|p| {
             p.ball = format!("class = \"sphere\"\nradius = {r}\n");
         });
     }
@@ -370,7 +442,7 @@ fn faults() -> Vec<Fault> {
         ("center nan", "[nan, 0.0, 0.0]"),
         ("center 1e13", "[0.0, 1e13, 0.0]"),
     ] {
-        add(what, "objects.ball", "center", &|p| {
+        add(v, base, what, "objects.ball", "center", &|p| {
             p.ball = format!("class = \"sphere\"\ncenter = {c}\n");
         });
     }
@@ -398,10 +470,21 @@ fn faults() -> Vec<Fault> {
             "[{ translate = [1e13, 0.0, 0.0] }]".into(),
         ),
     ] {
-        add(what, "objects.world.children[0]", "transform", &|p| {
-            p.transform = t.clone();
-        });
+        add(
+            v,
+            base,
+            what,
+            "objects.world.children[0]",
+            "transform",
+            &|p| {
+                p.transform = t.clone();
+            },
+        );
     }
+}
+
+/// A camera's view, a light's power and placement.
+fn camera_and_light_faults(v: &mut Vec<Fault>, base: &Parts) {
     for (what, key, cam) in [
         ("fov 0", "fov_y", "fov_y = 0.0\n"),
         ("fov 180", "fov_y", "fov_y = 180.0\n"),
@@ -415,7 +498,7 @@ fn faults() -> Vec<Fault> {
         ),
         ("up along view", "up", "up = [0.0, 0.0, 1.0]\n"),
     ] {
-        add(what, "cameras.c", key, &|p| {
+        add(v, base, what, "cameras.c", key, &|p| {
             p.camera = format!("class = \"pinhole\"\n{cam}");
         });
     }
@@ -446,8 +529,12 @@ fn faults() -> Vec<Fault> {
             "class = \"directional\"\nirradiance = [1.0, -1.0, 1.0]\n",
         ),
     ] {
-        add(what, "lights.l", key, &|p| p.light = light.into());
+        add(v, base, what, "lights.l", key, &|p| p.light = light.into());
     }
+}
+
+/// A shader's parameters, the integrator's depth, the background.
+fn shader_and_render_faults(v: &mut Vec<Fault>, base: &Parts) {
     for (what, key, shader) in [
         (
             "albedo 1.5",
@@ -467,14 +554,27 @@ fn faults() -> Vec<Fault> {
             "class = \"phong\"\nshininess = -1.0\n",
         ),
     ] {
-        add(what, "shaders.s", key, &|p| p.shader = shader.into());
+        add(v, base, what, "shaders.s", key, &|p| {
+            p.shader = shader.into()
+        });
     }
-    add("max_depth -1", "render.integrator", "max_depth", &|p| {
-        p.integrator = "{ class = \"whitted\", max_depth = -1 }".into();
-    });
-    add("background nan", "render", "background", &|p| {
+    add(
+        v,
+        base,
+        "max_depth -1",
+        "render.integrator",
+        "max_depth",
+        &|p| {
+            p.integrator = "{ class = \"whitted\", max_depth = -1 }".into();
+        },
+    );
+    add(v, base, "background nan", "render", "background", &|p| {
         p.background = "[0.0, nan, 0.0]".into();
     });
+}
+
+/// A mesh file's vertices and indices.
+fn mesh_faults(v: &mut Vec<Fault>, base: &Parts) {
     for (what, obj) in [
         ("vertex nan", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
         ("vertex inf", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n"),
@@ -495,13 +595,12 @@ fn faults() -> Vec<Fault> {
             key: "file",
         });
     }
-    v
 }
 
 /// The catalogue's V2: every invalid input refused when the scene is built
 /// (the base scene builds), and each error naming the object and the key,
 /// so that the user can find what to fix.
-fn v2(b: &mut Bench) -> Result<Vec<Line>> {
+fn invalid_parameters_are_refused_naming_object_and_key(b: &mut Bench) -> Result<Vec<Line>> {
     let base = Parts {
         mesh: true,
         ..Parts::default()
@@ -578,13 +677,18 @@ fn build_file(
     let mut file = SceneFile::read(path)?;
     file.apply_overrides(sets)?;
     let desc = Desc::from_file(&file)?;
-    Ok(rtk_shell::build(&file, desc, registry, &crate::Pool(pool))?)
+    Ok(rtk_shell::build(
+        &file,
+        desc,
+        registry,
+        &crate::shared::threads::Pool(pool),
+    )?)
 }
 
 /// The catalogue's V3: every scene in scenes/ rendered small through the
 /// render loop; the film drops a non-finite sample and counts it, so both
 /// the dropped samples and any non-finite pixel value are counted.
-fn v3(b: &mut Bench) -> Result<Vec<Line>> {
+fn example_scenes_render_no_non_finite_value(b: &mut Bench) -> Result<Vec<Line>> {
     let (w, h) = (b.n(64, 320), b.n(48, 240));
     let dir = scenes_dir()?;
     let mut scenes: Vec<PathBuf> = std::fs::read_dir(&dir)

@@ -13,10 +13,12 @@ use rtk_kernel::RngState;
 pub const S5: Case = Case {
     id: "S5",
     title: "house of mirrors: deep specular chains in closed mirrors",
-    run,
+    run: specular_chains_never_leave_a_closed_mirror,
 };
 
-fn run(b: &mut Bench) -> Result<Vec<Line>> {
+/// S5's three setups: the mirror furnace, two parallel mirrors, and a
+/// rendered house of mirrors.
+fn specular_chains_never_leave_a_closed_mirror(b: &mut Bench) -> Result<Vec<Line>> {
     let mut lines = furnace(b)?;
     lines.extend(parallel_mirrors(b)?);
     lines.extend(rendered(b)?);

@@ -9,10 +9,12 @@
 //! every line passes; the full run (minutes) is an ignored test.
 //!
 //! Each case is a function from a [`Bench`] (the plugin registry, a scratch
-//! folder, the size) to its lines. Cases build small scenes as TOML text and
-//! trace them through `World::root`, or render them, exactly as `rtk render`
-//! does; the f64 reference is the kernel's own routines instantiated for f64
-//! on the same f32 inputs (`rtk_kernel::geom`, generic over `Real`).
+//! folder, the size) to its lines, named after what it checks; its
+//! catalogue id (`A3`) is the [`Case`]'s `id`, which `--case` and every line
+//! use. Cases build small scenes as TOML text and trace them through
+//! `World::root`, or render them, exactly as `rtk render` does; the f64
+//! reference is the kernel's own routines instantiated for f64 on the same
+//! f32 inputs (`rtk_kernel::geom`, generic over `Real`).
 
 mod aggregates;
 mod bench;

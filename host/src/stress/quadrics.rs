@@ -14,21 +14,21 @@ use rtk_kernel::RngState;
 pub const Q1: Case = Case {
     id: "Q1",
     title: "sphere far from the origin: hit/miss and t against f64",
-    run: q1,
+    run: far_spheres_hit_as_in_f64,
 };
 
 /// docs/numerics.md Q2.
 pub const Q2: Case = Case {
     id: "Q2",
     title: "tiny spheres: hit/miss and t against f64",
-    run: q2,
+    run: tiny_spheres_hit_as_in_f64,
 };
 
 /// docs/numerics.md Q3.
 pub const Q3: Case = Case {
     id: "Q3",
     title: "ground sphere R 1e6, marble and ant: bounds, self-hits",
-    run: q3,
+    run: radii_seven_orders_apart_agree_with_f64,
 };
 
 /// The largest hit/miss mismatch rate against f64 the catalogue allows for a
@@ -241,7 +241,7 @@ fn disk(b: &mut Bench, rng: &mut RngState, dist: f64, r: f64) -> Result<Vec<Line
 
 /// A unit sphere at D ∈ {10, 1e4, 1e5, 1e6} in a random direction: the
 /// textbook b² − 4ac misclassifies half the rays from D = 1e4 on.
-fn q1(b: &mut Bench) -> Result<Vec<Line>> {
+fn far_spheres_hit_as_in_f64(b: &mut Bench) -> Result<Vec<Line>> {
     let mut rng = RngState::seeded(0x51);
     let mut lines = Vec::new();
     for dist in [10.0, 1e4, 1e5, 1e6] {
@@ -252,7 +252,7 @@ fn q1(b: &mut Bench) -> Result<Vec<Line>> {
 
 /// r = 1e-4 at distances 1 and 100, r = 1e-2 at 100: r² vanishes against
 /// |f|² in the textbook form. Targets by D/r, as Q1.
-fn q2(b: &mut Bench) -> Result<Vec<Line>> {
+fn tiny_spheres_hit_as_in_f64(b: &mut Bench) -> Result<Vec<Line>> {
     let mut rng = RngState::seeded(0x52);
     let mut lines = Vec::new();
     for (dist, r) in [(1.0, 1e-4), (100.0, 1e-4), (100.0, 1e-2)] {
@@ -272,7 +272,7 @@ fn q2(b: &mut Bench) -> Result<Vec<Line>> {
 /// spawned off the ant must neither re-hit it nor stop short; rays leaving
 /// the marble's underside must meet the ground where f64 does; shadow rays
 /// near the contact point must agree with f64 visibility.
-fn q3(b: &mut Bench) -> Result<Vec<Line>> {
+fn radii_seven_orders_apart_agree_with_f64(b: &mut Bench) -> Result<Vec<Line>> {
     let balls = [
         Ball::new(DVec3::new(0.0, -1e6, 0.0), 1e6),
         Ball::new(DVec3::new(0.0, 1.0, 0.0), 1.0),
@@ -297,10 +297,37 @@ fn q3(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(50_000, 200_000);
     let mut lines = Vec::new();
 
-    // Camera rays from above and in front: at the ground within 2 of the
-    // contact point, at the marble, at the ant (the disk of 1.5r about
-    // each). Which sphere is hit must match f64; t, the point and its bound
-    // are checked per sphere hit.
+    let (camera_lines, ant_hits) = camera_rays(&mut probe, &mut rng, &balls, &names, n)?;
+    lines.extend(camera_lines);
+    let per = b.n(10, 50);
+    lines.extend(rays_off_the_ant(
+        &mut probe, &mut rng, &balls, &ant_hits, per,
+    )?);
+
+    lines.extend(under_marble(b, &mut probe, &mut rng, &balls)?);
+    for radius in [1e-2, 1.0] {
+        lines.extend(contact_shadows(
+            b, &mut probe, &mut rng, &balls, light, radius,
+        )?);
+    }
+    Ok(lines)
+}
+
+/// Camera rays that hit the ant, with their hits.
+type AntHits = Vec<(Ray, Hit)>;
+
+/// Q3's camera rays from above and in front: at the ground within 2 of the
+/// contact point, at the marble, at the ant (the disk of 1.5r about each).
+/// Which sphere is hit must match f64; t, the point and its bound are
+/// checked per sphere hit. Returns the lines and the rays that hit the ant.
+fn camera_rays(
+    probe: &mut Probe,
+    rng: &mut RngState,
+    balls: &[Ball; 3],
+    names: &[&str; 3],
+    n: usize,
+) -> Result<(Vec<Line>, AntHits)> {
+    let mut lines = Vec::new();
     let eye = DVec3::new(0.0, 3.0, 6.0);
     let mut tallies: [Tally; 3] = Default::default();
     let (mut rays, mut mismatches) = (0u64, 0u64);
@@ -312,23 +339,18 @@ fn q3(b: &mut Bench) -> Result<Vec<Line>> {
                 let phi = std::f64::consts::TAU * rng.next_f64();
                 DVec3::new(rho * phi.cos(), 0.0, rho * phi.sin())
             } else {
-                disk_point(
-                    &mut rng,
-                    eye,
-                    balls[k].c.as_dvec3(),
-                    1.5 * balls[k].r as f64,
-                )
+                disk_point(rng, eye, balls[k].c.as_dvec3(), 1.5 * balls[k].r as f64)
             };
             let r = ray(eye, (aim - eye).normalize());
             rays += 1;
             let got = probe.nearest(&r)?;
-            let want = nearest64(&balls, &r);
+            let want = nearest64(balls, &r);
             let got_i = got.map(|h| h.at(0) as usize);
             if got_i != want.map(|w| w.0) {
                 mismatches += 1;
             }
             if let (Some(h), Some(i)) = (got, got_i) {
-                tallies[i].add(&mut probe, &balls, &r, &h, i, want)?;
+                tallies[i].add(probe, balls, &r, &h, i, want)?;
                 if i == 2 {
                     ant_hits.push((r, h));
                 }
@@ -343,25 +365,34 @@ fn q3(b: &mut Bench) -> Result<Vec<Line>> {
         mismatches as f64 / rays as f64,
         Target::AtMost(band_target(ant_ratio)),
     ));
-    for (t, name) in tallies.iter().zip(names) {
+    for (t, name) in tallies.iter().zip(names.iter()) {
         lines.extend(t.lines(&format!("{name} hits"), None, true));
     }
+    Ok((lines, ant_hits))
+}
 
-    // Rays spawned off the ant: outward ones must never hit the ant again
-    // (it is convex); inward ones must reach its far side (or the marble it
-    // touches), not stop at the near side or leave.
-    let per = b.n(10, 50);
+/// Rays spawned off the ant, `per` each way from each of `ant_hits`:
+/// outward ones must never hit the ant again (it is convex); inward ones
+/// must reach its far side (or the marble it touches), not stop at the near
+/// side or leave.
+fn rays_off_the_ant(
+    probe: &mut Probe,
+    rng: &mut RngState,
+    balls: &[Ball; 3],
+    ant_hits: &[(Ray, Hit)],
+    per: usize,
+) -> Result<Vec<Line>> {
     let (mut self_hits, mut inward_lost) = (0u64, 0u64);
-    for (r, h) in &ant_hits {
+    for (r, h) in ant_hits {
         let g = probe.geom(r, h)?;
         let out = g.ng.v().as_dvec3();
         for _ in 0..per {
-            let o = spawn_ray(&g, hemisphere(&mut rng, out).as_vec3(), r);
+            let o = spawn_ray(&g, hemisphere(rng, out).as_vec3(), r);
             if probe.nearest(&o)?.is_some_and(|x| x.at(0) == 2) {
                 self_hits += 1;
             }
-            let i = spawn_ray(&g, hemisphere(&mut rng, -out).as_vec3(), r);
-            match (probe.nearest(&i)?, nearest64(&balls, &i)) {
+            let i = spawn_ray(&g, hemisphere(rng, -out).as_vec3(), r);
+            match (probe.nearest(&i)?, nearest64(balls, &i)) {
                 // Which object: the ant's bottom touches the marble, and
                 // exits there tie with the marble's surface within the
                 // roots' error; what must not happen is no hit or a hit
@@ -372,16 +403,10 @@ fn q3(b: &mut Bench) -> Result<Vec<Line>> {
         }
     }
     let setup = format!("ant, {} hits x {per} spawned", ant_hits.len());
-    lines.push(Line::count(&setup, "outward self-hits", self_hits));
-    lines.push(Line::count(setup, "inward rays lost", inward_lost));
-
-    lines.extend(under_marble(b, &mut probe, &mut rng, &balls)?);
-    for radius in [1e-2, 1.0] {
-        lines.extend(contact_shadows(
-            b, &mut probe, &mut rng, &balls, light, radius,
-        )?);
-    }
-    Ok(lines)
+    Ok(vec![
+        Line::count(&setup, "outward self-hits", self_hits),
+        Line::count(setup, "inward rays lost", inward_lost),
+    ])
 }
 
 /// Rays leaving the marble's underside downwards (a mirror marble's

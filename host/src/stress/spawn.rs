@@ -16,28 +16,28 @@ use rtk_kernel::RngState;
 pub const S1: Case = Case {
     id: "S1",
     title: "self-intersection of spawned rays across scales",
-    run: s1,
+    run: spawned_rays_never_rehit_their_surface,
 };
 
 /// docs/numerics.md S2.
 pub const S2: Case = Case {
     id: "S2",
     title: "grazing spawned rays, binned by cos θ",
-    run: s2,
+    run: grazing_spawned_rays_never_rehit_their_surface,
 };
 
 /// docs/numerics.md S3.
 pub const S3: Case = Case {
     id: "S3",
     title: "thin gaps: the offset must not jump a neighbour",
-    run: s3,
+    run: spawned_rays_cross_thin_gaps,
 };
 
 /// docs/numerics.md S4.
 pub const S4: Case = Case {
     id: "S4",
     title: "shadow rays between two surface points",
-    run: s4,
+    run: shadow_rays_between_surface_points_are_unblocked,
 };
 
 /// Which primitive a hit found: the (child, primitive) choice at every level.
@@ -99,36 +99,14 @@ fn hit_on(
 
 /// Spawned rays over the hemisphere the arriving ray came from, counted
 /// when they meet the primitive they leave.
-fn s1(b: &mut Bench) -> Result<Vec<Line>> {
+fn spawned_rays_never_rehit_their_surface(b: &mut Bench) -> Result<Vec<Line>> {
     let (tris, per) = (b.n(40, 400), b.n(25, 500));
     let mut rng = RngState::seeded(0x51);
     let mut lines = Vec::new();
     for (mag_c, size) in SCALES {
         let c = unit_vector(&mut rng) * mag_c;
         let m = triangles(&mut rng, c, size, tris);
-        b.write_obj("s1.obj", &m)?;
-        let world = b.scene(&format!(
-            "{}[objects.m]\nclass = \"mesh\"\nfile = \"s1.obj\"\n",
-            header("m")
-        ))?;
-        let mut probe = Probe::new(&world);
-        let (mut spawned, mut rehits) = (0u64, 0u64);
-        for i in 0..tris {
-            let Some((r, h, g)) = hit_on(&mut probe, &mut rng, &m, i, size)? else {
-                continue;
-            };
-            let back = -r.dir.v().as_dvec3();
-            for _ in 0..per {
-                let w = hemisphere(&mut rng, back).as_vec3();
-                let s = spawn_ray(&g, w, &r);
-                spawned += 1;
-                if let Some(h2) = probe.nearest(&s)? {
-                    if path(&h2) == path(&h) {
-                        rehits += 1;
-                    }
-                }
-            }
-        }
+        let (spawned, rehits) = triangle_self_hits(b, &mut rng, &m, tris, per, size)?;
         let setup = format!("triangle |c| {} size {}", mag(mag_c), mag(size));
         lines.push(Line::count(
             format!("{setup}, {spawned} rays"),
@@ -136,44 +114,7 @@ fn s1(b: &mut Bench) -> Result<Vec<Line>> {
             rehits,
         ));
 
-        // Spheres: rays leaving outwards never meet the sphere again (it is
-        // convex); rays leaving inwards meet only its far side.
-        let world = b.scene(&format!(
-            "{}[objects.s]\nclass = \"sphere\"\ncenter = {}\nradius = {}\n",
-            header("s"),
-            vec3(c.to_array()),
-            num(size)
-        ))?;
-        let mut probe = Probe::new(&world);
-        let (mut spawned, mut rehits) = (0u64, 0u64);
-        for _ in 0..tris {
-            let o = c + unit_vector(&mut rng) * (size * 3.0);
-            let target = c + unit_vector(&mut rng) * (size * 0.7);
-            let r = ray(o, (target - o).normalize());
-            let Some(h) = probe.nearest(&r)? else {
-                continue;
-            };
-            let g = probe.geom(&r, &h)?;
-            let n = g.ng.v().as_dvec3();
-            let n = if n.dot(g.p.v().as_dvec3() - c) < 0.0 {
-                -n
-            } else {
-                n
-            };
-            for k in 0..per {
-                let out = k % 2 == 0;
-                let w = hemisphere(&mut rng, if out { n } else { -n });
-                let s = spawn_ray(&g, w.as_vec3(), &r);
-                spawned += 1;
-                match probe.nearest(&s)? {
-                    Some(_) if out => rehits += 1,
-                    // The far side lies at the chord 2r·cos(angle to −n).
-                    Some(h2) if (h2.t as f64) < 0.5 * 2.0 * size * w.dot(-n) => rehits += 1,
-                    None if !out => rehits += 1,
-                    _ => {}
-                }
-            }
-        }
+        let (spawned, rehits) = sphere_self_hits(b, &mut rng, c, size, tris, per)?;
         lines.push(Line::count(
             format!("sphere |c| {} r {}, {spawned} rays", mag(mag_c), mag(size)),
             "self-hits",
@@ -182,6 +123,92 @@ fn s1(b: &mut Bench) -> Result<Vec<Line>> {
     }
     lines.push(denormal_camera(b)?);
     Ok(lines)
+}
+
+/// S1 on the triangles `m` (of `size`): spawned rays over the hemisphere
+/// each hit's ray came from, `per` a hit; returns (spawned, self-hits).
+fn triangle_self_hits(
+    b: &mut Bench,
+    rng: &mut RngState,
+    m: &Mesh,
+    tris: usize,
+    per: usize,
+    size: f64,
+) -> Result<(u64, u64)> {
+    b.write_obj("s1.obj", m)?;
+    let world = b.scene(&format!(
+        "{}[objects.m]\nclass = \"mesh\"\nfile = \"s1.obj\"\n",
+        header("m")
+    ))?;
+    let mut probe = Probe::new(&world);
+    let (mut spawned, mut rehits) = (0u64, 0u64);
+    for i in 0..tris {
+        let Some((r, h, g)) = hit_on(&mut probe, rng, m, i, size)? else {
+            continue;
+        };
+        let back = -r.dir.v().as_dvec3();
+        for _ in 0..per {
+            let w = hemisphere(rng, back).as_vec3();
+            let s = spawn_ray(&g, w, &r);
+            spawned += 1;
+            if let Some(h2) = probe.nearest(&s)? {
+                if path(&h2) == path(&h) {
+                    rehits += 1;
+                }
+            }
+        }
+    }
+    Ok((spawned, rehits))
+}
+
+/// S1 on a sphere at `c` of radius `size`: rays leaving outwards never
+/// meet it again (it is convex), rays leaving inwards meet only its far
+/// side; returns (spawned, failures).
+fn sphere_self_hits(
+    b: &mut Bench,
+    rng: &mut RngState,
+    c: DVec3,
+    size: f64,
+    tris: usize,
+    per: usize,
+) -> Result<(u64, u64)> {
+    let world = b.scene(&format!(
+        "{}[objects.s]\nclass = \"sphere\"\ncenter = {}\nradius = {}\n",
+        header("s"),
+        vec3(c.to_array()),
+        num(size)
+    ))?;
+    let mut probe = Probe::new(&world);
+    let (mut spawned, mut rehits) = (0u64, 0u64);
+    for _ in 0..tris {
+        let o = c + unit_vector(rng) * (size * 3.0);
+        let target = c + unit_vector(rng) * (size * 0.7);
+        let r = ray(o, (target - o).normalize());
+        let Some(h) = probe.nearest(&r)? else {
+            continue;
+        };
+        let g = probe.geom(&r, &h)?;
+        let n = g.ng.v().as_dvec3();
+        let n = if n.dot(g.p.v().as_dvec3() - c) < 0.0 {
+            -n
+        } else {
+            n
+        };
+        for k in 0..per {
+            let out = k % 2 == 0;
+            let w = hemisphere(rng, if out { n } else { -n });
+            let s = spawn_ray(&g, w.as_vec3(), &r);
+            spawned += 1;
+            match probe.nearest(&s)? {
+                Some(_) if out => rehits += 1,
+                // The far side lies at the chord 2r·cos(angle to −n).
+                Some(h2) if (h2.t as f64) < 0.5 * 2.0 * size * w.dot(-n) => rehits += 1,
+                None if !out => rehits += 1,
+                _ => {}
+            }
+        }
+    }
+    Ok((spawned, rehits))
 }
 
 /// The converse of a self-hit: a camera one denormal (1.4e-45) above a
@@ -218,7 +245,7 @@ fn denormal_camera(b: &mut Bench) -> Result<Line> {
 
 /// S1's triangles with directions at a fixed angle to the surface: a
 /// normal offset does not depend on it, so every bin must be clean.
-fn s2(b: &mut Bench) -> Result<Vec<Line>> {
+fn grazing_spawned_rays_never_rehit_their_surface(b: &mut Bench) -> Result<Vec<Line>> {
     let (tris, per) = (b.n(40, 400), b.n(10, 100));
     let mut rng = RngState::seeded(0x52);
     let bins = [1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1];
@@ -319,7 +346,7 @@ fn smooth_mirror(b: &mut Bench, rng: &mut RngState) -> Result<Line> {
 /// crossing the first surface outwards must meet the second. The minimum
 /// resolvable gap is the smallest g, in ulps of |p|, from which every larger
 /// gap tried is crossed correctly.
-fn s3(b: &mut Bench) -> Result<Vec<Line>> {
+fn spawned_rays_cross_thin_gaps(b: &mut Bench) -> Result<Vec<Line>> {
     let rays = b.n(300, 5000);
     let gaps_ulps = [256.0, 64.0, 32.0, 16.0, 8.0, 4.0, 2.0];
     let mut rng = RngState::seeded(0x53);
@@ -335,84 +362,13 @@ fn s3(b: &mut Bench) -> Result<Vec<Line>> {
         let (mut sphere_all, mut plane_all) = (true, true);
         for &k in &gaps_ulps {
             let g = k * u;
-            let world = b.scene(&format!(
-                "{}[objects.a]\nclass = \"sphere\"\ncenter = {c}\nradius = 1.0\n\
-                 [objects.b]\nclass = \"sphere\"\ncenter = {c}\nradius = {}\n\
-                 [objects.w]\nclass = \"list\"\nchildren = [\"a\", \"b\"]\n",
-                header("w"),
-                num(1.0 + g),
-                c = vec3(c.to_array()),
-            ))?;
-            let mut probe = Probe::new(&world);
-            let mut bad = 0u64;
-            for _ in 0..rays {
-                let d = unit_vector(&mut rng);
-                let r = ray(c, d);
-                let Some(h) = probe.nearest(&r)? else {
-                    bad += 1;
-                    continue;
-                };
-                if h.stack[0] != 0 {
-                    bad += 1;
-                    continue;
-                }
-                let geo = probe.geom(&r, &h)?;
-                let s = spawn_ray(&geo, r.dir.v(), &r);
-                match probe.nearest(&s)? {
-                    Some(h2) if h2.stack[0] == 1 => {}
-                    _ => bad += 1,
-                }
-            }
+            let bad = concentric_spheres_crossed(b, &mut rng, c, g, rays)?;
             sphere_all &= bad == 0;
             if sphere_all {
                 sphere_ok = Some(k);
             }
 
-            // Two parallel squares g apart, crossed from below.
-            let z0 = c.z as f32;
-            let z1 = (c.z + g) as f32;
-            let sq = |z: f32| {
-                [
-                    [c.x as f32 - 2.0, c.y as f32 - 2.0, z],
-                    [c.x as f32 + 2.0, c.y as f32 - 2.0, z],
-                    [c.x as f32 + 2.0, c.y as f32 + 2.0, z],
-                    [c.x as f32 - 2.0, c.y as f32 + 2.0, z],
-                ]
-            };
-            let mut verts = sq(z0).to_vec();
-            verts.extend(sq(z1));
-            let m = Mesh {
-                verts,
-                tris: vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]],
-            };
-            b.write_obj("s3.obj", &m)?;
-            let world = b.scene(&format!(
-                "{}[objects.m]\nclass = \"mesh\"\nfile = \"s3.obj\"\n",
-                header("m")
-            ))?;
-            let mut probe = Probe::new(&world);
-            let mut bad_p = 0u64;
-            for _ in 0..rays {
-                let target =
-                    c + DVec3::new(rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0, 0.0);
-                let o = target - DVec3::new(0.3, 0.2, 1.0 + rng.next_f64());
-                let r = ray(o, (target - o).normalize());
-                let Some(h) = probe.nearest(&r)? else {
-                    bad_p += 1;
-                    continue;
-                };
-                let lower = path(&h).last().is_some_and(|&e| e < 2);
-                if !lower {
-                    bad_p += 1;
-                    continue;
-                }
-                let geo = probe.geom(&r, &h)?;
-                let s = spawn_ray(&geo, r.dir.v(), &r);
-                match probe.nearest(&s)? {
-                    Some(h2) if path(&h2).last().is_some_and(|&e| e >= 2) => {}
-                    _ => bad_p += 1,
-                }
-            }
+            let bad_p = parallel_planes_crossed(b, &mut rng, c, g, rays)?;
             plane_all &= bad_p == 0;
             if plane_all {
                 plane_ok = Some(k);
@@ -430,10 +386,106 @@ fn s3(b: &mut Bench) -> Result<Vec<Line>> {
     Ok(lines)
 }
 
+/// S3's spheres about `c` of radius 1 and 1 + `g`: rays from the centre
+/// must hit the inner one, and their spawned continuations the outer one;
+/// returns the failures.
+fn concentric_spheres_crossed(
+    b: &mut Bench,
+    rng: &mut RngState,
+    c: DVec3,
+    g: f64,
+    rays: usize,
+) -> Result<u64> {
+    let world = b.scene(&format!(
+        "{}[objects.a]\nclass = \"sphere\"\ncenter = {c}\nradius = 1.0\n\
+         [objects.b]\nclass = \"sphere\"\ncenter = {c}\nradius = {}\n\
+         [objects.w]\nclass = \"list\"\nchildren = [\"a\", \"b\"]\n",
+        header("w"),
+        num(1.0 + g),
+        c = vec3(c.to_array()),
+    ))?;
+    let mut probe = Probe::new(&world);
+    let mut bad = 0u64;
+    for _ in 0..rays {
+        let d = unit_vector(rng);
+        let r = ray(c, d);
+        let Some(h) = probe.nearest(&r)? else {
+            bad += 1;
+            continue;
+        };
+        if h.stack[0] != 0 {
+            bad += 1;
+            continue;
+        }
+        let geo = probe.geom(&r, &h)?;
+        let s = spawn_ray(&geo, r.dir.v(), &r);
+        match probe.nearest(&s)? {
+            Some(h2) if h2.stack[0] == 1 => {}
+            _ => bad += 1,
+        }
+    }
+    Ok(bad)
+}
+
+/// S3's two parallel squares `g` apart, crossed from below: a ray hitting
+/// the lower one must, spawned on, hit the upper; returns the failures.
+fn parallel_planes_crossed(
+    b: &mut Bench,
+    rng: &mut RngState,
+    c: DVec3,
+    g: f64,
+    rays: usize,
+) -> Result<u64> {
+    let z0 = c.z as f32;
+    let z1 = (c.z + g) as f32;
+    let sq = |z: f32| {
+        [
+            [c.x as f32 - 2.0, c.y as f32 - 2.0, z],
+            [c.x as f32 + 2.0, c.y as f32 - 2.0, z],
+            [c.x as f32 + 2.0, c.y as f32 + 2.0, z],
+            [c.x as f32 - 2.0, c.y as f32 + 2.0, z],
+        ]
+    };
+    let mut verts = sq(z0).to_vec();
+    verts.extend(sq(z1));
+    let m = Mesh {
+        verts,
+        tris: vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]],
+    };
+    b.write_obj("s3.obj", &m)?;
+    let world = b.scene(&format!(
+        "{}[objects.m]\nclass = \"mesh\"\nfile = \"s3.obj\"\n",
+        header("m")
+    ))?;
+    let mut probe = Probe::new(&world);
+    let mut bad_p = 0u64;
+    for _ in 0..rays {
+        let target = c + DVec3::new(rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0, 0.0);
+        let o = target - DVec3::new(0.3, 0.2, 1.0 + rng.next_f64());
+        let r = ray(o, (target - o).normalize());
+        let Some(h) = probe.nearest(&r)? else {
+            bad_p += 1;
+            continue;
+        };
+        let lower = path(&h).last().is_some_and(|&e| e < 2);
+        if !lower {
+            bad_p += 1;
+            continue;
+        }
+        let geo = probe.geom(&r, &h)?;
+        let s = spawn_ray(&geo, r.dir.v(), &r);
+        match probe.nearest(&s)? {
+            Some(h2) if path(&h2).last().is_some_and(|&e| e >= 2) => {}
+            _ => bad_p += 1,
+        }
+    }
+    Ok(bad_p)
+}
+
 /// Pairs of points on the inside of a closed box (rays from inside find
 /// them, so each has its real local geometry), edge-sharing pairs
 /// included: a shadow ray between them crosses empty space.
-fn s4(b: &mut Bench) -> Result<Vec<Line>> {
+fn shadow_rays_between_surface_points_are_unblocked(b: &mut Bench) -> Result<Vec<Line>> {
     let pairs = b.n(3000, 200_000);
     let mut rng = RngState::seeded(0x54);
     let mut lines = Vec::new();

@@ -14,34 +14,35 @@ use rtk_kernel::abi::{Hit, Ray};
 use rtk_kernel::geom::{intersect_triangle_f64, is_degenerate};
 use rtk_kernel::glam::{DVec2, DVec3, Vec3};
 use rtk_kernel::RngState;
+use rtk_shell::World;
 use std::collections::HashMap;
 
 /// docs/numerics.md T1.
 pub const T1: Case = Case {
     id: "T1",
     title: "shared edge: rays aimed at a quad's diagonal",
-    run: t1,
+    run: rays_at_a_shared_edge_never_leak,
 };
 
 /// docs/numerics.md T2.
 pub const T2: Case = Case {
     id: "T2",
     title: "closed mesh: every ray from inside hits",
-    run: t2,
+    run: rays_from_inside_a_closed_mesh_always_hit,
 };
 
 /// docs/numerics.md T3.
 pub const T3: Case = Case {
     id: "T3",
     title: "degenerate, needle and tiny triangles in a closed mesh",
-    run: t3,
+    run: hard_triangles_neither_leak_nor_report_degenerates,
 };
 
 /// docs/numerics.md T4.
 pub const T4: Case = Case {
     id: "T4",
     title: "huge coordinates: a finite hit or refused at build",
-    run: t4,
+    run: huge_coordinates_hit_finitely_or_are_refused,
 };
 
 /// A scene whose root is the mesh in `file`, under the shell's default
@@ -81,7 +82,7 @@ fn f64v(p: [f32; 3]) -> DVec3 {
 /// edge both triangles contain, and the tie rule picks one), but parity and
 /// all-hits users count it twice (catalogue C3); the bound of 1e-3 flags a
 /// test that accepts on both sides of an edge beyond exact collinearity.
-fn t1(b: &mut Bench) -> Result<Vec<Line>> {
+fn rays_at_a_shared_edge_never_leak(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(20_000, 400_000);
     let mut rng = RngState::seeded(0x71);
     let mut lines = Vec::new();
@@ -96,57 +97,7 @@ fn t1(b: &mut Bench) -> Result<Vec<Line>> {
         (1.0, 1e5),
         (1e3, 1e5),
     ] {
-        let rot = rotation(&mut rng);
-        let c = unit_vector(&mut rng) * dist;
-        let verts: Vec<[f32; 3]> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-            .iter()
-            .map(|&(x, y)| {
-                (c + rot * DVec3::new(x, y, 0.0) * scale)
-                    .as_vec3()
-                    .to_array()
-            })
-            .collect();
-        let mesh = |tris: Vec<[u32; 3]>| Mesh {
-            verts: verts.clone(),
-            tris,
-        };
-        b.write_obj("t1-quad.obj", &mesh(vec![[0, 1, 2], [0, 2, 3]]))?;
-        b.write_obj("t1-a.obj", &mesh(vec![[0, 1, 2]]))?;
-        b.write_obj("t1-b.obj", &mesh(vec![[0, 2, 3]]))?;
-        let wq = b.scene(&mesh_scene("t1-quad.obj"))?;
-        let wa = b.scene(&bare_scene("t1-a.obj"))?;
-        let wb = b.scene(&bare_scene("t1-b.obj"))?;
-        let (mut pq, mut pa, mut pb) = (Probe::new(&wq), Probe::new(&wa), Probe::new(&wb));
-        let normal = rot * DVec3::Z;
-        let (p0, p2) = (f64v(verts[0]), f64v(verts[2]));
-        let mut leaks = 0u64;
-        for _ in 0..n {
-            let p = p0 + (p2 - p0) * (1e-5 + (1.0 - 2e-5) * rng.next_f64());
-            let side = if rng.next_u32() & 1 == 0 { 1.0 } else { -1.0 };
-            let along =
-                rot * DVec3::new(4.0 * rng.next_f64() - 2.0, 4.0 * rng.next_f64() - 2.0, 0.0);
-            let height = side * (0.5 + 2.5 * rng.next_f64());
-            let o = (p + (normal * height + along) * scale).as_vec3();
-            let d = (p - o.as_dvec3()).normalize().as_vec3();
-            let ray = ray32(o, d);
-            let quad = pq.nearest(&ray)?;
-            let (a, bb) = (pa.nearest(&ray)?, pb.nearest(&ray)?);
-            if quad.is_none() || (a.is_none() && bb.is_none()) {
-                if leaks == 0 {
-                    eprintln!(
-                        "T1 scale {scale:e} |c| {dist:e}: leak (quad {}, a {}, b {}); ray {}",
-                        show(&quad),
-                        show(&a),
-                        show(&bb),
-                        bits(&ray)
-                    );
-                }
-                leaks += 1;
-            }
-            if a.is_some() && bb.is_some() {
-                doubles += 1;
-            }
-        }
+        let leaks = quad_edge_leaks(b, &mut rng, scale, dist, n, &mut doubles)?;
         total += n as u64;
         lines.push(Line::count(
             format!("scale {} |c| {}, {n} rays", mag(scale), mag(dist)),
@@ -160,7 +111,77 @@ fn t1(b: &mut Bench) -> Result<Vec<Line>> {
         doubles as f64 / total as f64,
         Target::AtMost(1e-3),
     ));
-    // The failing ray of Oblikovati#2146, against the quad (±5, ±5, 0).
+    lines.push(the_oblikovati_ray(b)?);
+    Ok(lines)
+}
+
+/// T1 at one scale and distance: `n` rays at the diagonal of a random
+/// quad, through the quad (its `bvh`) and each triangle alone. Returns the
+/// leaks; double hits are added to `doubles`.
+fn quad_edge_leaks(
+    b: &mut Bench,
+    rng: &mut RngState,
+    scale: f64,
+    dist: f64,
+    n: usize,
+    doubles: &mut u64,
+) -> Result<u64> {
+    let rot = rotation(rng);
+    let c = unit_vector(rng) * dist;
+    let verts: Vec<[f32; 3]> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .iter()
+        .map(|&(x, y)| {
+            (c + rot * DVec3::new(x, y, 0.0) * scale)
+                .as_vec3()
+                .to_array()
+        })
+        .collect();
+    let mesh = |tris: Vec<[u32; 3]>| Mesh {
+        verts: verts.clone(),
+        tris,
+    };
+    b.write_obj("t1-quad.obj", &mesh(vec![[0, 1, 2], [0, 2, 3]]))?;
+    b.write_obj("t1-a.obj", &mesh(vec![[0, 1, 2]]))?;
+    b.write_obj("t1-b.obj", &mesh(vec![[0, 2, 3]]))?;
+    let wq = b.scene(&mesh_scene("t1-quad.obj"))?;
+    let wa = b.scene(&bare_scene("t1-a.obj"))?;
+    let wb = b.scene(&bare_scene("t1-b.obj"))?;
+    let (mut pq, mut pa, mut pb) = (Probe::new(&wq), Probe::new(&wa), Probe::new(&wb));
+    let normal = rot * DVec3::Z;
+    let (p0, p2) = (f64v(verts[0]), f64v(verts[2]));
+    let mut leaks = 0u64;
+    for _ in 0..n {
+        let p = p0 + (p2 - p0) * (1e-5 + (1.0 - 2e-5) * rng.next_f64());
+        let side = if rng.next_u32() & 1 == 0 { 1.0 } else { -1.0 };
+        let along = rot * DVec3::new(4.0 * rng.next_f64() - 2.0, 4.0 * rng.next_f64() - 2.0, 0.0);
+        let height = side * (0.5 + 2.5 * rng.next_f64());
+        let o = (p + (normal * height + along) * scale).as_vec3();
+        let d = (p - o.as_dvec3()).normalize().as_vec3();
+        let ray = ray32(o, d);
+        let quad = pq.nearest(&ray)?;
+        let (a, bb) = (pa.nearest(&ray)?, pb.nearest(&ray)?);
+        if quad.is_none() || (a.is_none() && bb.is_none()) {
+            if leaks == 0 {
+                eprintln!(
+                    "T1 scale {scale:e} |c| {dist:e}: leak (quad {}, a {}, b {}); ray {}",
+                    show(&quad),
+                    show(&a),
+                    show(&bb),
+                    bits(&ray)
+                );
+            }
+            leaks += 1;
+        }
+        if a.is_some() && bb.is_some() {
+            *doubles += 1;
+        }
+    }
+    Ok(leaks)
+}
+
+/// The failing ray of Oblikovati#2146, against the quad (±5, ±5, 0),
+/// under the bvh and with no acceleration.
+fn the_oblikovati_ray(b: &mut Bench) -> Result<Line> {
     let quad = Mesh {
         verts: vec![
             [-5.0, -5.0, 0.0],
@@ -182,12 +203,11 @@ fn t1(b: &mut Bench) -> Result<Vec<Line>> {
             leaks += 1;
         }
     }
-    lines.push(Line::count(
+    Ok(Line::count(
         "Oblikovati#2146 ray, bvh and none",
         "edge leaks",
         leaks,
-    ));
-    Ok(lines)
+    ))
 }
 
 /// T2: pbrt-v4's `Triangle.Watertight` recipe. A 16×16 UV sphere with
@@ -196,7 +216,7 @@ fn t1(b: &mut Bench) -> Result<Vec<Line>> {
 /// with the mesh at |c| = 0, 1e3, 1e5. Every ray from inside must hit (see
 /// [`leak`]). Where a vertex fan holds a nearly edge-on triangle, pbrt's
 /// `t ≤ δt → reject` leaks; rtk rechecks such hits in f64 (rule 4).
-fn t2(b: &mut Bench) -> Result<Vec<Line>> {
+fn rays_from_inside_a_closed_mesh_always_hit(b: &mut Bench) -> Result<Vec<Line>> {
     let (random, aimed) = (b.n(20_000, 200_000), b.n(20_000, 1_000_000));
     let every = b.n(4, 20);
     let mut rng = RngState::seeded(0x72);
@@ -261,6 +281,81 @@ struct Hard {
     diagonal: (DVec3, DVec3),
 }
 
+/// The points of [`hard_box`]'s faces in a face's (u, v) square: its
+/// corners A, B, C, D, the needles' apexes q (h above AB) and q2 (h/√2
+/// off the diagonal), the centre m, and the 1e-6 triangle t0, t1, t2.
+#[derive(Clone, Copy)]
+struct FacePoints {
+    a: DVec2,
+    b: DVec2,
+    cc: DVec2,
+    d: DVec2,
+    q: DVec2,
+    m: DVec2,
+    t0: DVec2,
+    t1: DVec2,
+    t2: DVec2,
+    q2: DVec2,
+}
+
+impl FacePoints {
+    fn new(h: f64) -> FacePoints {
+        FacePoints {
+            a: DVec2::new(-1.0, -1.0),
+            b: DVec2::new(1.0, -1.0),
+            cc: DVec2::new(1.0, 1.0),
+            d: DVec2::new(-1.0, 1.0),
+            q: DVec2::new(0.0, -1.0 + h),
+            m: DVec2::ZERO,
+            t0: DVec2::new(0.3, 0.2),
+            t1: DVec2::new(0.3 + 1e-6, 0.2),
+            t2: DVec2::new(0.3, 0.2 + 1e-6),
+            q2: DVec2::new(0.2 + h / 2.0, 0.2 - h / 2.0),
+        }
+    }
+
+    /// The six faces' triangles, in the order [`hard_box`] describes.
+    fn faces(&self) -> [Vec<[DVec2; 3]>; 6] {
+        let FacePoints {
+            a,
+            b,
+            cc,
+            d,
+            q,
+            m,
+            t0,
+            t1,
+            t2,
+            q2,
+        } = *self;
+        [
+            vec![[a, b, cc], [a, cc, d]],
+            vec![[a, b, q], [b, cc, q], [cc, d, q], [d, a, q]],
+            vec![
+                [a, b, m],
+                [b, cc, m],
+                [cc, d, m],
+                [d, a, m],
+                [a, m, cc],
+                [a, a, b],
+                [b, m, d],
+            ],
+            vec![
+                [a, b, t1],
+                [a, t1, t0],
+                [b, cc, t1],
+                [cc, t2, t1],
+                [cc, d, t2],
+                [d, a, t0],
+                [d, t0, t2],
+                [t0, t1, t2],
+            ],
+            vec![[a, cc, d], [a, b, q2], [b, cc, q2], [cc, a, q2]],
+            vec![[a, b, cc], [a, cc, d]],
+        ]
+    }
+}
+
 /// Each face is triangulated in its own (u, v) square, counter-clockwise
 /// seen from outside; vertices are rounded to f32 once and shared by
 /// position, so every edge is shared exactly. The faces: plain; a fan about
@@ -276,45 +371,21 @@ struct Hard {
 /// triangle may collapse (below an ulp at |c| = 1e3, as the catalogue asks):
 /// it lies inside the face, so its fan stays closed.
 fn hard_box(c: DVec3) -> Hard {
-    let (a, b, cc, d) = (
-        DVec2::new(-1.0, -1.0),
-        DVec2::new(1.0, -1.0),
-        DVec2::new(1.0, 1.0),
-        DVec2::new(-1.0, 1.0),
-    );
     let top = (c.abs().max_element() + 1.0) as f32;
     let h = 2e-6f64.max(4.0 * (top.next_up() - top) as f64);
-    let q = DVec2::new(0.0, -1.0 + h);
-    let m = DVec2::ZERO;
-    let t0 = DVec2::new(0.3, 0.2);
-    let t1 = DVec2::new(0.3 + 1e-6, 0.2);
-    let t2 = DVec2::new(0.3, 0.2 + 1e-6);
-    let q2 = DVec2::new(0.2 + h / 2.0, 0.2 - h / 2.0);
-    let faces: [Vec<[DVec2; 3]>; 6] = [
-        vec![[a, b, cc], [a, cc, d]],
-        vec![[a, b, q], [b, cc, q], [cc, d, q], [d, a, q]],
-        vec![
-            [a, b, m],
-            [b, cc, m],
-            [cc, d, m],
-            [d, a, m],
-            [a, m, cc],
-            [a, a, b],
-            [b, m, d],
-        ],
-        vec![
-            [a, b, t1],
-            [a, t1, t0],
-            [b, cc, t1],
-            [cc, t2, t1],
-            [cc, d, t2],
-            [d, a, t0],
-            [d, t0, t2],
-            [t0, t1, t2],
-        ],
-        vec![[a, cc, d], [a, b, q2], [b, cc, q2], [cc, a, q2]],
-        vec![[a, b, cc], [a, cc, d]],
-    ];
+    let fp = FacePoints::new(h);
+    let faces = fp.faces();
+    let FacePoints {
+        a,
+        cc,
+        q,
+        m,
+        t0,
+        t1,
+        t2,
+        q2,
+        ..
+    } = fp;
     let mut mesh = Mesh {
         verts: vec![],
         tris: vec![],
@@ -378,7 +449,7 @@ fn hard_box(c: DVec3) -> Hard {
 /// random directions. No ray may leak (bvh or none), no hit may name a
 /// zero-area triangle, normals must be finite and unit, and nothing in the
 /// hit's record (t, p, its error, normals, tangents, uv) may be non-finite.
-fn t3(b: &mut Bench) -> Result<Vec<Line>> {
+fn hard_triangles_neither_leak_nor_report_degenerates(b: &mut Bench) -> Result<Vec<Line>> {
     let n = b.n(20_000, 300_000);
     let mut rng = RngState::seeded(0x73);
     let mut lines = Vec::new();
@@ -462,11 +533,11 @@ fn t3(b: &mut Bench) -> Result<Vec<Line>> {
 /// the same inputs. Rays are aimed inside the triangle (barycentrics ≥
 /// 0.01), where f32 and f64 cannot disagree about hitting. Also a closed
 /// mesh at 2²⁴, where the f32 spacing is 2, must not leak.
-fn t4(b: &mut Bench) -> Result<Vec<Line>> {
+fn huge_coordinates_hit_finitely_or_are_refused(b: &mut Bench) -> Result<Vec<Line>> {
     let per = b.n(1_000, 50_000);
     let mut rng = RngState::seeded(0x74);
     let (mut accepted, mut refused) = (0u64, 0u64);
-    let (mut nonfinite, mut misses, mut worst, mut traced) = (0u64, 0u64, 0.0f64, 0u64);
+    let mut t = HugeTally::default();
     for &s in &[
         1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 3e12, 1e13, 1e15, 1e19, 1e20, 1e25, 1e30,
     ] {
@@ -488,30 +559,69 @@ fn t4(b: &mut Bench) -> Result<Vec<Line>> {
             continue;
         }
         let w = b.scene(&scene)?;
-        let mut probe = Probe::new(&w);
+        t.trace(&w, &mut rng, s, v, per)?;
+    }
+    let traced = t.traced;
+    let mut lines = vec![
+        Line::count(
+            format!("s 1e7..1e12, {traced} rays"),
+            "non-finite t",
+            t.nonfinite,
+        ),
+        Line::count(
+            format!("s 1e7..1e12, {traced} rays"),
+            "hit/miss differs from f64",
+            t.misses,
+        ),
+        Line::new(
+            format!("s 1e7..1e12, {traced} rays"),
+            "max |t-t64|/t64",
+            t.worst,
+            Target::AtMost(1e-6),
+        ),
+        Line::count(
+            format!("s 3e12..1e30, {refused} meshes"),
+            "out-of-range input accepted",
+            accepted,
+        ),
+    ];
+    lines.extend(closed_mesh_far_away(b, &mut rng)?);
+    Ok(lines)
+}
+
+/// T4's measures over the triangles it traces.
+#[derive(Default)]
+struct HugeTally {
+    nonfinite: u64,
+    /// Hit or miss unlike the f64 test's.
+    misses: u64,
+    /// The largest relative error of t against f64.
+    worst: f64,
+    traced: u64,
+}
+
+impl HugeTally {
+    /// `per` rays at T4's triangle of size `s` (vertices `v`) in `w`, the
+    /// first from (0, 0, s) straight down, the rest from random points
+    /// above it aimed inside it (barycentrics ≥ 0.01), against the f64 test.
+    fn trace(
+        &mut self,
+        w: &World,
+        rng: &mut RngState,
+        s: f64,
+        v: [[f32; 3]; 3],
+        per: usize,
+    ) -> Result<()> {
+        let mut probe = Probe::new(w);
         let v64 = v.map(|p| p.map(f64::from));
         for k in 0..per {
             let (o, d) = if k == 0 {
                 (Vec3::new(0.0, 0.0, s as f32), Vec3::NEG_Z)
             } else {
-                let (x, y) = (rng.next_f64(), rng.next_f64());
-                let (x, y) = if x + y > 1.0 {
-                    (1.0 - x, 1.0 - y)
-                } else {
-                    (x, y)
-                };
-                let bc = [1.0 - x - y, x, y].map(|w| 0.01 + 0.97 * w);
-                let p = (0..3).fold(DVec3::ZERO, |p, i| p + DVec3::from(v64[i]) * bc[i]);
-                let o = DVec3::new(
-                    s * (rng.next_f64() - 0.5),
-                    s * (rng.next_f64() - 0.5),
-                    s * (0.5 + 1.5 * rng.next_f64()),
-                )
-                .as_vec3();
-                (o, (p - o.as_dvec3()).normalize().as_vec3())
+                aimed_inside(rng, s, &v64)
             };
             let ray = ray32(o, d);
-            traced += 1;
+            self.traced += 1;
             let got = probe.nearest(&ray)?;
             let want = intersect_triangle_f64(
                 o.as_dvec3().to_array(),
@@ -521,46 +631,48 @@ fn t4(b: &mut Bench) -> Result<Vec<Line>> {
                 f64::INFINITY,
             );
             match (got, want) {
-                (Some(h), _) if !h.t.is_finite() => nonfinite += 1,
-                (Some(h), Some(r)) => worst = worst.max((h.t as f64 - r.t).abs() / r.t),
+                (Some(h), _) if !h.t.is_finite() => self.nonfinite += 1,
+                (Some(h), Some(r)) => self.worst = self.worst.max((h.t as f64 - r.t).abs() / r.t),
                 (None, None) => {}
                 _ => {
-                    if misses == 0 {
+                    if self.misses == 0 {
                         eprintln!(
                             "T4 s {s:e}: f32 {} vs f64 {want:?}; ray {}",
                             show(&got),
                             bits(&ray)
                         );
                     }
-                    misses += 1;
+                    self.misses += 1;
                 }
             }
         }
+        Ok(())
     }
-    let mut lines = vec![
-        Line::count(
-            format!("s 1e7..1e12, {traced} rays"),
-            "non-finite t",
-            nonfinite,
-        ),
-        Line::count(
-            format!("s 1e7..1e12, {traced} rays"),
-            "hit/miss differs from f64",
-            misses,
-        ),
-        Line::new(
-            format!("s 1e7..1e12, {traced} rays"),
-            "max |t-t64|/t64",
-            worst,
-            Target::AtMost(1e-6),
-        ),
-        Line::count(
-            format!("s 3e12..1e30, {refused} meshes"),
-            "out-of-range input accepted",
-            accepted,
-        ),
-    ];
-    // A closed mesh at 2^24, radii 50-100: vertices snap to even integers.
+}
+
+/// A ray from a random point above T4's triangle of size `s` (vertices
+/// `v64`), aimed at a point inside it: its origin and direction.
+fn aimed_inside(rng: &mut RngState, s: f64, v64: &[[f64; 3]; 3]) -> (Vec3, Vec3) {
+    let (x, y) = (rng.next_f64(), rng.next_f64());
+    let (x, y) = if x + y > 1.0 {
+        (1.0 - x, 1.0 - y)
+    } else {
+        (x, y)
+    };
+    let bc = [1.0 - x - y, x, y].map(|w| 0.01 + 0.97 * w);
+    let p = (0..3).fold(DVec3::ZERO, |p, i| p + DVec3::from(v64[i]) * bc[i]);
+    let o = DVec3::new(
+        s * (rng.next_f64() - 0.5),
+        s * (rng.next_f64() - 0.5),
+        s * (0.5 + 1.5 * rng.next_f64()),
+    )
+    .as_vec3();
+    (o, (p - o.as_dvec3()).normalize().as_vec3())
+}
+
+/// T4's closed mesh at 2^24, radii 50-100 (its vertices snap to even
+/// integers): rays from inside must not leak nor give a non-finite t.
+fn closed_mesh_far_away(b: &mut Bench, rng: &mut RngState) -> Result<Vec<Line>> {
     let n = b.n(10_000, 200_000);
     let c = DVec3::splat(2f64.powi(24));
     let mesh = uv_sphere(c, 16, 16, |_| 50.0 + 50.0 * rng.next_f64());
@@ -569,9 +681,9 @@ fn t4(b: &mut Bench) -> Result<Vec<Line>> {
     let mut probe = Probe::new(&w);
     let (mut leaks, mut nonfinite) = (0u64, 0u64);
     for k in 0..n {
-        let o = (c + unit_vector(&mut rng) * (20.0 * rng.next_f64().cbrt())).as_vec3();
+        let o = (c + unit_vector(rng) * (20.0 * rng.next_f64().cbrt())).as_vec3();
         let d = if k % 2 == 0 {
-            unit_vector(&mut rng).as_vec3()
+            unit_vector(rng).as_vec3()
         } else {
             let v = mesh.verts[(rng.next_u32() as usize) % mesh.verts.len()];
             (f64v(v) - o.as_dvec3()).normalize().as_vec3()
@@ -584,9 +696,10 @@ fn t4(b: &mut Bench) -> Result<Vec<Line>> {
         }
     }
     let setup = format!("closed mesh at 2^24, {n} rays");
-    lines.push(Line::count(&setup, "leaks", leaks));
-    lines.push(Line::count(setup, "non-finite t", nonfinite));
-    Ok(lines)
+    Ok(vec![
+        Line::count(&setup, "leaks", leaks),
+        Line::count(setup, "non-finite t", nonfinite),
+    ])
 }
 
 /// A ray from inside the closed mesh `m` found nothing: count it as a

@@ -349,7 +349,7 @@ macro_rules! handle {
                 // SAFETY: `this` is the object `class` just made, owned by the
                 // handle (destroyed when its last count goes).
                 let live = unsafe { $live::new(this, class) };
-                Ok(Self::own($inner { live, lobes: 0 })?)
+                Self::own($inner { live, lobes: 0 })
             }
         }
     };
@@ -516,7 +516,7 @@ impl Integrator {
 }
 
 /// Lend a bound record as the [`Scene`] a plugin receives.
-pub(crate) fn scene_of<'a>(r: &'a SceneRef) -> &'a Scene {
+pub(crate) fn scene_of(r: &SceneRef) -> &Scene {
     // SAFETY: a bound record's host is alive for its borrow (`SceneRecord`).
     unsafe { Scene::from_record(r) }
 }

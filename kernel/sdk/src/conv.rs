@@ -27,7 +27,7 @@ impl<T> FromRaw<T> for T {
     }
 }
 
-impl<'a, T> FromRaw<*const T> for &'a T {
+impl<T> FromRaw<*const T> for &T {
     #[inline(always)]
     unsafe fn from_raw(r: *const T) -> Self {
         // SAFETY: guaranteed by the caller (valid for the call).
@@ -35,7 +35,7 @@ impl<'a, T> FromRaw<*const T> for &'a T {
     }
 }
 
-impl<'a, T> FromRaw<*const T> for Option<&'a T> {
+impl<T> FromRaw<*const T> for Option<&T> {
     #[inline(always)]
     unsafe fn from_raw(r: *const T) -> Self {
         // SAFETY: guaranteed by the caller: null, or valid for the call.
@@ -43,7 +43,7 @@ impl<'a, T> FromRaw<*const T> for Option<&'a T> {
     }
 }
 
-impl<'a, T> FromRaw<*mut T> for &'a mut T {
+impl<T> FromRaw<*mut T> for &mut T {
     #[inline(always)]
     unsafe fn from_raw(r: *mut T) -> Self {
         // SAFETY: guaranteed by the caller (valid and exclusive for the call).
@@ -51,7 +51,7 @@ impl<'a, T> FromRaw<*mut T> for &'a mut T {
     }
 }
 
-impl<'a, T> FromRaw<Span<T>> for &'a [T] {
+impl<T> FromRaw<Span<T>> for &[T] {
     #[inline(always)]
     unsafe fn from_raw(r: Span<T>) -> Self {
         // SAFETY: guaranteed by the caller.
@@ -59,7 +59,7 @@ impl<'a, T> FromRaw<Span<T>> for &'a [T] {
     }
 }
 
-impl<'a, T> FromRaw<SpanMut<T>> for &'a mut [T] {
+impl<T> FromRaw<SpanMut<T>> for &mut [T] {
     #[inline(always)]
     unsafe fn from_raw(r: SpanMut<T>) -> Self {
         // SAFETY: guaranteed by the caller.
@@ -82,7 +82,7 @@ impl FromRaw<*const Affine3x4> for glam::DAffine3 {
     }
 }
 
-impl<'a> FromRaw<*const PrepareEnv> for &'a Prepare {
+impl FromRaw<*const PrepareEnv> for &Prepare {
     #[inline]
     unsafe fn from_raw(r: *const PrepareEnv) -> Self {
         // SAFETY: `Prepare` is a `repr(transparent)` wrapper of the
@@ -91,7 +91,7 @@ impl<'a> FromRaw<*const PrepareEnv> for &'a Prepare {
     }
 }
 
-impl<'a> FromRaw<*const SceneRef> for &'a Scene {
+impl FromRaw<*const SceneRef> for &Scene {
     #[inline(always)]
     unsafe fn from_raw(r: *const SceneRef) -> Self {
         // SAFETY: `Scene` is a `repr(transparent)` wrapper of the record,

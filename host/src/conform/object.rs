@@ -255,11 +255,81 @@ impl Tally {
 fn compare(test: &World, oracle: Option<&World>, rays: &[Ray], t: &mut Tally) -> Result<()> {
     let mut pt = Probe::new(test);
     let mut po = oracle.map(Probe::new);
-    let b = test.bounds;
-    let (bmin, bmax) = (b.min.v(), b.max.v());
-    let extent = (bmax - bmin).max_element();
-    let slack = extent.max(1.0) * 1e-4;
-    let in_bounds = |r: &Ray, h: &Hit, whose: &str, t: &mut Tally| {
+    let v = Volumes::of(test)?;
+    for r in rays {
+        t.rays += 1;
+        let ht = pt.nearest(r)?;
+        let ot = pt.occluded(r)?;
+        if ot != ht.is_some() {
+            note(&mut t.anyhit, || {
+                format!(
+                    "{}: occluded {ot}, but intersect {}",
+                    ray_text(r),
+                    show(&ht)
+                )
+            });
+        }
+        if let Some(h) = &ht {
+            v.check_in_bounds(r, h, "the plugin's", t);
+            v.check_in_volumes(test, r, h, t);
+            check_geom(&mut pt, r, h, v.extent, t)?;
+            check_nothing_before(&mut pt, r, h, v.extent, t)?;
+        }
+        if let Some(po) = po.as_mut() {
+            let ho = po.nearest(r)?;
+            if !same(&ht, &ho) {
+                let tie =
+                    matches!((&ht, &ho), (Some(a), Some(b)) if a.t.to_bits() == b.t.to_bits());
+                let slot = if tie { &mut t.ties } else { &mut t.nearest };
+                note(slot, || {
+                    format!("{}: plugin {} oracle {}", ray_text(r), show(&ht), show(&ho))
+                });
+            }
+            if let Some(h) = &ho {
+                v.check_in_bounds(r, h, "the oracle's", t);
+            }
+            let oo = po.occluded(r)?;
+            if ot != oo {
+                note(&mut t.anyhit, || {
+                    format!("{}: plugin occluded {ot}, oracle {oo}", ray_text(r))
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What the plugin says holds all of it: its box, and the sphere and slabs
+/// `inq_bounds` answers (or the kernel derives from the hull points or box
+/// when the plugin offers none); hits may stray by `slack`.
+struct Volumes {
+    bmin: Vec3,
+    bmax: Vec3,
+    /// The box's largest side.
+    extent: f32,
+    slack: f32,
+    sphere: rtk_kernel::abi::BoundSphere,
+    slabs: rtk_kernel::abi::SlabBounds,
+}
+
+impl Volumes {
+    fn of(test: &World) -> Result<Volumes> {
+        let b = test.bounds;
+        let (bmin, bmax) = (b.min.v(), b.max.v());
+        let extent = (bmax - bmin).max_element();
+        Ok(Volumes {
+            bmin,
+            bmax,
+            extent,
+            slack: extent.max(1.0) * 1e-4,
+            sphere: test.root.bound_sphere(0.0, 1.0)?,
+            slabs: test.root.slabs(0.0, 1.0)?,
+        })
+    }
+
+    /// `whose` hit `h` lies in the plugin's box.
+    fn check_in_bounds(&self, r: &Ray, h: &Hit, whose: &str, t: &mut Tally) {
+        let (bmin, bmax, slack) = (self.bmin, self.bmax, self.slack);
         let p = r.origin.v() + r.dir.v() * h.t;
         let inside =
             (p.cmpge(bmin - Vec3::splat(slack)) & p.cmple(bmax + Vec3::splat(slack))).all();
@@ -273,20 +343,19 @@ fn compare(test: &World, oracle: Option<&World>, rays: &[Ray], t: &mut Tally) ->
                 )
             });
         }
-    };
-    // The sphere and slabs `inq_bounds` answers (or the kernel derives from
-    // the hull points or box when the plugin offers none) must hold every
-    // hit too, with the box check's slack.
-    let sphere = test.root.bound_sphere(0.0, 1.0)?;
-    let slabs = test.root.slabs(0.0, 1.0)?;
-    let in_volumes = |r: &Ray, h: &Hit, t: &mut Tally| {
+    }
+
+    /// The plugin's hit `h` lies in its sphere and slabs, with the box
+    /// check's slack.
+    fn check_in_volumes(&self, test: &World, r: &Ray, h: &Hit, t: &mut Tally) {
+        let slack = self.slack;
         let p = (r.origin.v() + r.dir.v() * h.t).as_dvec3();
-        let c = sphere.center.v().as_dvec3();
-        let in_sphere = p.distance(c) <= sphere.radius as f64 + slack as f64;
+        let c = self.sphere.center.v().as_dvec3();
+        let in_sphere = p.distance(c) <= self.sphere.radius as f64 + slack as f64;
         let in_slabs = SLAB_NORMALS.iter().enumerate().all(|(k, n)| {
             let n = Vec3::from(*n).as_dvec3();
             let (v, pad) = (n.dot(p), slack as f64 * n.abs().element_sum());
-            slabs.lo[k] as f64 - pad <= v && v <= slabs.hi[k] as f64 + pad
+            self.slabs.lo[k] as f64 - pad <= v && v <= self.slabs.hi[k] as f64 + pad
         });
         if !(in_sphere && in_slabs) {
             note(&mut t.volumes, || {
@@ -303,102 +372,77 @@ fn compare(test: &World, oracle: Option<&World>, rays: &[Ray], t: &mut Tally) ->
                 )
             });
         }
-    };
-    for r in rays {
-        t.rays += 1;
-        let ht = pt.nearest(r)?;
-        let ot = pt.occluded(r)?;
-        if ot != ht.is_some() {
-            note(&mut t.anyhit, || {
-                format!(
-                    "{}: occluded {ot}, but intersect {}",
-                    ray_text(r),
-                    show(&ht)
-                )
-            });
-        }
-        if let Some(h) = &ht {
-            in_bounds(r, h, "the plugin's", t);
-            in_volumes(r, h, t);
-            let g = pt.geom(r, h)?;
-            let at = r.origin.v() + r.dir.v() * h.t;
-            let scale = at.abs().max_element().max(extent).max(1.0);
-            let need =
-                geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL;
-            let unit = |n: Vec3| n.is_finite() && (n.length() - 1.0).abs() <= 1e-3;
-            let off = (g.p.v() - at).abs().max_element();
-            if g.filled & need != need
-                || !(off <= 1e-4 * scale)
-                || !unit(g.ng.v())
-                || !unit(g.ns.v())
-            {
-                note(&mut t.geom, || {
-                    format!(
-                        "{}: hit at {:?} (t {:?}); local_geom filled {:#b}, p {:?}, ng {:?}, ns {:?}",
-                        ray_text(r),
-                        at.to_array(),
-                        h.t,
-                        g.filled,
-                        g.p.to_array(),
-                        g.ng.to_array(),
-                        g.ns.to_array()
-                    )
-                });
-            }
-            if !(h.t > r.t_min && h.t < r.t_max && h.t.is_finite()) {
-                note(&mut t.interval, || {
-                    format!(
-                        "{}: a hit at t {:?}, outside the ray's interval",
-                        ray_text(r),
-                        h.t
-                    )
-                });
-            }
-            let short = Ray { t_max: h.t, ..*r };
-            let before = pt.nearest(&short)?;
-            let occ = pt.occluded(&short)?;
-            // The same primitive, a few ulps nearer: its root was rounded
-            // otherwise for the narrower interval (a search bracketed by
-            // t_max), not a nearer surface missed. (The root's child may
-            // differ: a duplicate child then answers first.)
-            let leaf = |h: &Hit| h.stack[(h.depth as usize).saturating_sub(1)];
-            let scale = h.t.max(extent).max(r.origin.v().abs().max_element());
-            let rerounded = before.as_ref().is_some_and(|b| {
-                leaf(b) == leaf(h) && h.t - b.t <= REROUND_EPSILONS * f32::EPSILON * scale
-            });
-            if rerounded {
-                t.rerounded += 1;
-            } else if before.is_some() || occ {
-                note(&mut t.interval, || {
-                    format!(
-                        "{}: nearest hit {}, but with t_max = that t: {} (occluded {occ})",
-                        ray_text(r),
-                        show(&ht),
-                        show(&before)
-                    )
-                });
-            }
-        }
-        if let Some(po) = po.as_mut() {
-            let ho = po.nearest(r)?;
-            if !same(&ht, &ho) {
-                let tie =
-                    matches!((&ht, &ho), (Some(a), Some(b)) if a.t.to_bits() == b.t.to_bits());
-                let slot = if tie { &mut t.ties } else { &mut t.nearest };
-                note(slot, || {
-                    format!("{}: plugin {} oracle {}", ray_text(r), show(&ht), show(&ho))
-                });
-            }
-            if let Some(h) = &ho {
-                in_bounds(r, h, "the oracle's", t);
-            }
-            let oo = po.occluded(r)?;
-            if ot != oo {
-                note(&mut t.anyhit, || {
-                    format!("{}: plugin occluded {ot}, oracle {oo}", ray_text(r))
-                });
-            }
-        }
+    }
+}
+
+/// The hit's local geometry: position, geometric and shading normal
+/// filled, the position at the hit, the normals unit.
+fn check_geom(pt: &mut Probe, r: &Ray, h: &Hit, extent: f32, t: &mut Tally) -> Result<()> {
+    let g = pt.geom(r, h)?;
+    let at = r.origin.v() + r.dir.v() * h.t;
+    let scale = at.abs().max_element().max(extent).max(1.0);
+    let need = geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL;
+    let unit = |n: Vec3| n.is_finite() && (n.length() - 1.0).abs() <= 1e-3;
+    let off = (g.p.v() - at).abs().max_element();
+    if g.filled & need != need || !(off <= 1e-4 * scale) || !unit(g.ng.v()) || !unit(g.ns.v()) {
+        note(&mut t.geom, || {
+            format!(
+                "{}: hit at {:?} (t {:?}); local_geom filled {:#b}, p {:?}, ng {:?}, ns {:?}",
+                ray_text(r),
+                at.to_array(),
+                h.t,
+                g.filled,
+                g.p.to_array(),
+                g.ng.to_array(),
+                g.ns.to_array()
+            )
+        });
+    }
+    Ok(())
+}
+
+/// The nearest hit `h` lies in the ray's interval, and the ray again with
+/// `t_max` at it finds nothing (but the same primitive rounded nearer).
+fn check_nothing_before(
+    pt: &mut Probe,
+    r: &Ray,
+    h: &Hit,
+    extent: f32,
+    t: &mut Tally,
+) -> Result<()> {
+    if !(h.t > r.t_min && h.t < r.t_max && h.t.is_finite()) {
+        note(&mut t.interval, || {
+            format!(
+                "{}: a hit at t {:?}, outside the ray's interval",
+                ray_text(r),
+                h.t
+            )
+        });
+    }
+    let short = Ray { t_max: h.t, ..*r };
+    let before = pt.nearest(&short)?;
+    let occ = pt.occluded(&short)?;
+    // The same primitive, a few ulps nearer: its root was rounded
+    // otherwise for the narrower interval (a search bracketed by
+    // t_max), not a nearer surface missed. (The root's child may
+    // differ: a duplicate child then answers first.)
+    let leaf = |h: &Hit| h.stack[(h.depth as usize).saturating_sub(1)];
+    let scale = h.t.max(extent).max(r.origin.v().abs().max_element());
+    let rerounded = before.as_ref().is_some_and(|b| {
+        leaf(b) == leaf(h) && h.t - b.t <= REROUND_EPSILONS * f32::EPSILON * scale
+    });
+    if rerounded {
+        t.rerounded += 1;
+    } else if before.is_some() || occ {
+        let ht = Some(*h);
+        note(&mut t.interval, || {
+            format!(
+                "{}: nearest hit {}, but with t_max = that t: {} (occluded {occ})",
+                ray_text(r),
+                show(&ht),
+                show(&before)
+            )
+        });
     }
     Ok(())
 }
@@ -562,7 +606,7 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<Shape> {
     suite.at("unknown-key-refused");
     let c = unknown_key(cx, shape.count());
     suite.push(c);
-    crate::conform_panics::run(cx, suite, shape.count())?;
+    super::panics::run(cx, suite, shape.count())?;
     Ok(shape)
 }
 
@@ -626,85 +670,156 @@ fn with_children(
 ) -> Result<()> {
     let class = cx.class.clone();
     let params = cx.params.clone();
-    let none = Params::default();
-    let mut t = Tally::default();
-    let mut nest_in = Tally::default();
-    let mut nest_out = Tally::default();
-    let (mut conc_bad, mut conc_of) = (0, 0);
+    let mut all = ChildTallies::default();
     suite.at("nearest-hit");
     for k in 0..scenes {
-        let (defs, kids, bvh_kids) = match shape {
-            Shape::Fixed(n) => {
-                // Each child a list of disjoint closed objects; the same as bvhs.
-                let s = random_scene(&cx.bench, &mut cx.rng, k, nobj.max(n), true)?;
-                let mut defs = s.defs;
-                let (mut kids, mut bvh_kids) = (Vec::new(), Vec::new());
-                for g in 0..n {
-                    let members: Vec<String> =
-                        s.children.iter().skip(g).step_by(n).cloned().collect();
-                    defs += &def(&format!("g{g}"), "list", &none, &members);
-                    defs += &def(&format!("h{g}"), "bvh", &none, &members);
-                    kids.push(format!("\"g{g}\""));
-                    bvh_kids.push(format!("\"h{g}\""));
-                }
-                (defs, kids, bvh_kids)
-            }
-            _ => {
-                let s = random_scene(&cx.bench, &mut cx.rng, k, nobj, false)?;
-                let defs = s.defs + &def("inner_bvh", "bvh", &none, &s.children);
-                let bvh_kids = vec!["\"inner_bvh\"".to_string(), s.children[0].clone()];
-                (defs, s.children, bvh_kids)
-            }
-        };
-        let test = cx.bench.scene(&world(&defs, &class, &params, &kids))?;
+        let c = children(cx, shape, k, nobj)?;
+        let test = cx.bench.scene(&world(&c.defs, &class, &params, &c.kids))?;
         let oracle_world = match oracle {
-            Some((o, op)) => Some(cx.bench.scene(&world(&defs, o, op, &kids))?),
+            Some((o, op)) => Some(cx.bench.scene(&world(&c.defs, o, op, &c.kids))?),
             None => None,
         };
         let rs = rays(&mut cx.rng, nrays, oracle_world.as_ref().unwrap_or(&test));
-        compare(&test, oracle_world.as_ref(), &rs, &mut t)?;
-        // Nesting: the plugin inside bvh, against the plugin inside list.
-        suite.at("nested-inside-bvh");
-        let inner = def("inner", &class, &params, &kids);
-        let w_in = cx.bench.scene(&world(
-            &format!("{defs}{inner}"),
-            "bvh",
-            &none,
-            &["\"inner\"".into()],
-        ))?;
-        // Against the oracle in list where there is one, else the plugin in list.
-        let inner_o = match oracle {
-            Some((o, op)) => def("inner", o, op, &kids),
-            None => inner.clone(),
-        };
-        let o_in = cx.bench.scene(&world(
-            &format!("{defs}{inner_o}"),
-            "list",
-            &none,
-            &["\"inner\"".into()],
-        ))?;
-        compare(&w_in, Some(&o_in), &rs, &mut nest_in)?;
-        // And bvh inside the plugin: for an aggregate against the oracle
-        // over the same children; for a class with fixed children, against
-        // itself over lists.
-        suite.at("bvh-nested-inside");
-        let w_out = cx.bench.scene(&world(&defs, &class, &params, &bvh_kids))?;
-        match shape {
-            Shape::Fixed(_) => compare(&w_out, Some(&test), &rs, &mut nest_out)?,
-            _ => {
-                let (o, op) = oracle.expect("an aggregate has an oracle");
-                let o_out = cx.bench.scene(&world(&defs, o, op, &bvh_kids))?;
-                compare(&w_out, Some(&o_out), &rs, &mut nest_out)?
-            }
-        }
+        compare(&test, oracle_world.as_ref(), &rs, &mut all.t)?;
+        let scene = SceneUnderTest { c, test, rs };
+        compare_nested(cx, suite, shape, oracle, &scene, &mut all)?;
         // Every scene: a race shows only when threads happen to
         // interleave, which a loaded machine makes rarer.
         suite.at("concurrent-queries");
-        let (bad, of) = concurrent(&test, &rs, cx.threads)?;
-        conc_bad += bad;
-        conc_of += of;
+        let (bad, of) = concurrent(&scene.test, &scene.rs, cx.threads)?;
+        all.conc_bad += bad;
+        all.conc_of += of;
         suite.at("nearest-hit");
     }
+    push_children_checks(suite, shape, oracle, &all, cx.threads);
+    Ok(())
+}
+
+/// The tallies over every scene of [`with_children`].
+#[derive(Default)]
+struct ChildTallies {
+    /// The plugin at the root.
+    t: Tally,
+    /// The plugin inside a bvh.
+    nest_in: Tally,
+    /// Bvhs inside the plugin.
+    nest_out: Tally,
+    conc_bad: u64,
+    conc_of: u64,
+}
+
+/// The definitions of a random scene and the children the plugin gets:
+/// `kids` (lists, or the scene's objects) and `bvh_kids` (the same under
+/// bvhs).
+struct Children {
+    defs: String,
+    kids: Vec<String>,
+    bvh_kids: Vec<String>,
+}
+
+/// A random scene's children for `shape`: for a fixed number `n`, each
+/// child a list (and a bvh) of disjoint closed objects; for an aggregate,
+/// the scene's objects, and for the bvh nesting a bvh of them beside the
+/// first.
+fn children(cx: &mut Cx, shape: Shape, k: usize, nobj: usize) -> Result<Children> {
+    let none = Params::default();
+    Ok(match shape {
+        Shape::Fixed(n) => {
+            // Each child a list of disjoint closed objects; the same as bvhs.
+            let s = random_scene(&cx.bench, &mut cx.rng, k, nobj.max(n), true)?;
+            let mut defs = s.defs;
+            let (mut kids, mut bvh_kids) = (Vec::new(), Vec::new());
+            for g in 0..n {
+                let members: Vec<String> = s.children.iter().skip(g).step_by(n).cloned().collect();
+                defs += &def(&format!("g{g}"), "list", &none, &members);
+                defs += &def(&format!("h{g}"), "bvh", &none, &members);
+                kids.push(format!("\"g{g}\""));
+                bvh_kids.push(format!("\"h{g}\""));
+            }
+            Children {
+                defs,
+                kids,
+                bvh_kids,
+            }
+        }
+        _ => {
+            let s = random_scene(&cx.bench, &mut cx.rng, k, nobj, false)?;
+            let defs = s.defs + &def("inner_bvh", "bvh", &none, &s.children);
+            let bvh_kids = vec!["\"inner_bvh\"".to_string(), s.children[0].clone()];
+            Children {
+                defs,
+                kids: s.children,
+                bvh_kids,
+            }
+        }
+    })
+}
+
+/// One scene with the plugin at its root and the rays traced through it.
+struct SceneUnderTest {
+    c: Children,
+    test: World,
+    rs: Vec<Ray>,
+}
+
+/// Nesting: the plugin inside a bvh against it (or the oracle) inside a
+/// list, and bvhs inside the plugin against the oracle over the same
+/// children (or, for a class with fixed children, against itself over
+/// lists).
+fn compare_nested(
+    cx: &mut Cx,
+    suite: &mut Suite,
+    shape: Shape,
+    oracle: Option<&(String, Params)>,
+    scene: &SceneUnderTest,
+    all: &mut ChildTallies,
+) -> Result<()> {
+    let (c, rs) = (&scene.c, &scene.rs);
+    let none = Params::default();
+    suite.at("nested-inside-bvh");
+    let inner = def("inner", &cx.class, &cx.params, &c.kids);
+    let w_in = cx.bench.scene(&world(
+        &format!("{}{inner}", c.defs),
+        "bvh",
+        &none,
+        &["\"inner\"".into()],
+    ))?;
+    // Against the oracle in list where there is one, else the plugin in list.
+    let inner_o = match oracle {
+        Some((o, op)) => def("inner", o, op, &c.kids),
+        None => inner.clone(),
+    };
+    let o_in = cx.bench.scene(&world(
+        &format!("{}{inner_o}", c.defs),
+        "list",
+        &none,
+        &["\"inner\"".into()],
+    ))?;
+    compare(&w_in, Some(&o_in), rs, &mut all.nest_in)?;
+    suite.at("bvh-nested-inside");
+    let w_out = cx
+        .bench
+        .scene(&world(&c.defs, &cx.class, &cx.params, &c.bvh_kids))?;
+    match shape {
+        Shape::Fixed(_) => compare(&w_out, Some(&scene.test), rs, &mut all.nest_out),
+        _ => {
+            let (o, op) = oracle.expect("an aggregate has an oracle");
+            let o_out = cx.bench.scene(&world(&c.defs, o, op, &c.bvh_kids))?;
+            compare(&w_out, Some(&o_out), rs, &mut all.nest_out)
+        }
+    }
+}
+
+/// The checks' lines from the tallies (`nearest-hit` and
+/// `ties-lowest-index` skipped without an oracle).
+fn push_children_checks(
+    suite: &mut Suite,
+    shape: Shape,
+    oracle: Option<&(String, Params)>,
+    all: &ChildTallies,
+    threads: usize,
+) {
+    let t = &all.t;
     match oracle {
         Some((o, _)) => {
             let rays = format!("rays agree with `{o}`");
@@ -738,20 +853,19 @@ fn with_children(
         t.rays,
         "rays",
     ));
-    suite.push(interval_check(&t));
+    suite.push(interval_check(t));
     suite.push(Check::held("local-geom", &t.geom, t.rays, "rays"));
     suite.push(Check::tally(
         "nested-inside-bvh",
-        &nest_in.merged(),
-        nest_in.rays,
+        &all.nest_in.merged(),
+        all.nest_in.rays,
         "rays",
     ));
     suite.push(Check::tally(
         "bvh-nested-inside",
-        &nest_out.merged(),
-        nest_out.rays,
+        &all.nest_out.merged(),
+        all.nest_out.rays,
         "rays",
     ));
-    suite.push(concurrency_check(conc_bad, conc_of, cx.threads));
-    Ok(())
+    suite.push(concurrency_check(all.conc_bad, all.conc_of, threads));
 }

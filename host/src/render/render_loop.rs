@@ -10,7 +10,7 @@
 //! and the final pixel, sum × (1 / spp) — is the same f64 however the work
 //! was split into passes, runs (checkpoint and resume), crops or threads.
 
-use crate::tracer::Tracer;
+use crate::render::tracer::Tracer;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rtk_kernel::abi::*;
 use rtk_shell::desc::render::Filter;
@@ -362,32 +362,15 @@ pub fn render_passes(
             accum.full_width, accum.full_height, r.width, r.height
         ));
     }
-    let threads = pool.current_num_threads();
     let rect = accum.rect;
-    let job = Job {
-        tracer,
-        width: r.width,
-        height: r.height,
-        rect,
-        spp: r.spp,
-        seed: r.seed,
-        filter: r.filter,
-        stratified: r.stratified,
-        shutter: r.shutter,
-        tiles_x: rect.width().div_ceil(TILE),
-        threads: threads as u32,
-        next_query: (0..threads).map(|_| AtomicU64::new(0)).collect(),
-        failure: Failure::default(),
-        interrupt: ctl.stop,
-    };
+    let job = Job::new(tracer, rect, pool.current_num_threads(), ctl.stop);
     let n_tiles = job.tiles_x * rect.height().div_ceil(TILE);
     let todo: u64 = accum
         .counts
         .iter()
         .map(|&c| r.spp.saturating_sub(c) as u64)
         .sum();
-    let bar = progress_bar(todo, ctl.progress);
-    let (started, drawn) = (Instant::now(), AtomicBool::new(!ctl.progress));
+    let progress = Progress::new(todo, ctl.progress);
     let pass = ctl.pass_spp.max(1);
     let end = loop {
         let (min, _) = accum.sample_range();
@@ -398,25 +381,9 @@ pub fn render_passes(
             .saturating_add(1)
             .saturating_mul(pass)
             .min(r.spp);
-        let shared = Mutex::new(&mut *accum);
-        pool.install(|| {
-            use rayon::prelude::*;
-            (0..n_tiles).into_par_iter().for_each(|t| {
-                if job.stopped() {
-                    return;
-                }
-                let samples = job.tile(&shared, t, target);
-                bar.inc(samples);
-                if !drawn.load(Ordering::Relaxed)
-                    && started.elapsed().as_secs_f32() > 1.0
-                    && !drawn.swap(true, Ordering::Relaxed)
-                {
-                    bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
-                }
-            })
-        });
+        job.pass(pool, accum, n_tiles, target, &progress);
         if let Some(msg) = job.failure.first.lock().ok().and_then(|f| f.clone()) {
-            bar.finish_and_clear();
+            progress.bar.finish_and_clear();
             return Err(msg);
         }
         if job.stopped() {
@@ -429,12 +396,43 @@ pub fn render_passes(
             break End::TimeUp;
         }
         if let Err(e) = (ctl.after_pass)(accum) {
-            bar.finish_and_clear();
+            progress.bar.finish_and_clear();
             return Err(e);
         }
     };
-    bar.finish_and_clear();
+    progress.bar.finish_and_clear();
     Ok(end)
+}
+
+/// The progress bar and when it starts to be drawn.
+struct Progress {
+    bar: ProgressBar,
+    started: Instant,
+    /// Drawn already (or never to be: hidden).
+    drawn: AtomicBool,
+}
+
+impl Progress {
+    /// A bar of `todo` samples, hidden unless `shown`.
+    fn new(todo: u64, shown: bool) -> Progress {
+        Progress {
+            bar: progress_bar(todo, shown),
+            started: Instant::now(),
+            drawn: AtomicBool::new(!shown),
+        }
+    }
+
+    /// Count `samples` more done; start drawing once a second has passed.
+    fn add(&self, samples: u64) {
+        self.bar.inc(samples);
+        if !self.drawn.load(Ordering::Relaxed)
+            && self.started.elapsed().as_secs_f32() > 1.0
+            && !self.drawn.swap(true, Ordering::Relaxed)
+        {
+            self.bar
+                .set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
+        }
+    }
 }
 
 /// The progress bar: camera samples done, their rate and the time left.
@@ -454,6 +452,57 @@ fn progress_bar(n: u64, shown: bool) -> ProgressBar {
         .progress_chars("=> "),
     );
     b
+}
+
+impl<'a, 'w> Job<'a, 'w> {
+    /// Rendering `rect` of the world's image on `threads` threads, stopped
+    /// early by `interrupt`.
+    fn new(
+        tracer: &'a Tracer<'w>,
+        rect: Rect,
+        threads: usize,
+        interrupt: Option<&'a AtomicBool>,
+    ) -> Self {
+        let r = &tracer.world().desc.render;
+        Job {
+            tracer,
+            width: r.width,
+            height: r.height,
+            rect,
+            spp: r.spp,
+            seed: r.seed,
+            filter: r.filter,
+            stratified: r.stratified,
+            shutter: r.shutter,
+            tiles_x: rect.width().div_ceil(TILE),
+            threads: threads as u32,
+            next_query: (0..threads).map(|_| AtomicU64::new(0)).collect(),
+            failure: Failure::default(),
+            interrupt,
+        }
+    }
+
+    /// One pass: every tile's pixels brought up to `target` samples, on
+    /// the pool's threads (tiles left undone once the job has stopped).
+    fn pass(
+        &self,
+        pool: &rayon::ThreadPool,
+        accum: &mut Accum,
+        n_tiles: u32,
+        target: u32,
+        progress: &Progress,
+    ) {
+        let shared = Mutex::new(accum);
+        pool.install(|| {
+            use rayon::prelude::*;
+            (0..n_tiles).into_par_iter().for_each(|t| {
+                if self.stopped() {
+                    return;
+                }
+                progress.add(self.tile(&shared, t, target));
+            })
+        });
+    }
 }
 
 impl Job<'_, '_> {

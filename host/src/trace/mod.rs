@@ -2,8 +2,10 @@
 //! aggregate) and report throughput, build time, memory and checksums — the
 //! interface benchmarks, tests and other tools use.
 
-use crate::rays::{self, HitRec, RayRec};
+pub(crate) mod rays;
+
 use anyhow::{bail, Context, Result};
+use rays::{HitRec, RayRec};
 use rtk_kernel::abi::{Hit, Ray, Stats, TraceCtx};
 use rtk_shell::plugins::Module;
 use rtk_shell::{Parallel, PluginPath, Registry, World};

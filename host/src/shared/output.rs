@@ -2,7 +2,7 @@
 //! temporary file beside the target and renamed into place, so that a failed
 //! or interrupted run never leaves a half-written image.
 
-use crate::render::Film;
+use crate::render::render_loop::Film;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
@@ -14,7 +14,7 @@ pub enum Format {
     /// Linear 32-bit float OpenEXR.
     Exr,
     /// rtk's film file (f64 sums and sample counts: checkpoints and crops,
-    /// `crate::checkpoint`), written by the caller, not by [`write()`].
+    /// `crate::render::film_file`), written by the caller, not by [`write()`].
     Film,
 }
 
@@ -28,7 +28,7 @@ pub fn format_of(path: &Path) -> Result<Format> {
     {
         Some("png") => Ok(Format::Png),
         Some("exr") => Ok(Format::Exr),
-        Some(crate::checkpoint::EXTENSION) => Ok(Format::Film),
+        Some(crate::render::film_file::EXTENSION) => Ok(Format::Film),
         _ => bail!(
             "output {}: the file name must end in .png or .exr (or .rtkfilm, a film file: docs/farm.md)",
             path.display()

@@ -1,12 +1,17 @@
 //! `rtk converge`: run time against error. The scene is loaded once and
 //! rendered at each sample count with several seeds; each render is timed
 //! (the render only) and measured against a reference image or a closed-form
-//! one ([`crate::analytic`]). Writes `converge.csv`, `converge.json` (the
+//! one ([`crate::converge::analytic`]). Writes `converge.csv`, `converge.json` (the
 //! fit and the comparison) and `converge.png` (log-log RMSE against seconds).
 
-use crate::analytic::Analytic;
-use crate::images::{self, Image};
-use crate::{output, tracer};
+pub(crate) mod analytic;
+mod plot;
+
+use crate::render::render_loop::{self, Film};
+use crate::render::tracer;
+use crate::shared::images::{self, Image};
+use crate::shared::{output, scene};
+use analytic::Analytic;
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -357,66 +362,13 @@ pub fn run(a: ConvergeArgs, pool: &rayon::ThreadPool, threads: usize) -> Result<
     let analytic = a.analytic.as_deref().map(Analytic::parse).transpose()?;
     let other = a.compare.as_deref().map(read_curve).transpose()?;
 
-    let (file, desc) = crate::read_scene(&a.scene, &a.set, a.safe)?;
+    let (file, desc) = scene::read_scene(&a.scene, &a.set, a.safe)?;
     let (w, h) = (desc.render.width, desc.render.height);
-    let reference = match (&analytic, &a.reference) {
-        (Some(an), _) => Image::uniform(w, h, an.radiance().map(|v| v as f32)),
-        (None, Some(p)) => {
-            let r = images::read(p)?;
-            if (r.width, r.height) != (w, h) {
-                bail!(
-                    "the reference {} is {}x{} but {} renders {w}x{h}: match them with --set render.width={} --set render.height={}",
-                    p.display(),
-                    r.width,
-                    r.height,
-                    a.scene.display(),
-                    r.width,
-                    r.height
-                );
-            }
-            r
-        }
-        (None, None) => bail!("give --reference FILE or --analytic SPEC"),
-    };
-    let reference_name = match (&a.analytic, &a.reference) {
-        (Some(s), _) => format!("analytic {s}"),
-        (None, Some(p)) => p.display().to_string(),
-        _ => String::new(),
-    };
+    let (reference, reference_name) = reference_image(&a, analytic.as_ref(), w, h)?;
     prepare_out(&a.out)?;
 
-    let mut world = crate::build_world(&file, desc, &a.plugin_path, pool)?;
-    let total = spps.len() * a.seeds as usize;
-    let mut rows = Vec::with_capacity(total);
-    for (i, &spp) in spps.iter().enumerate() {
-        for k in 1..=a.seeds as u64 {
-            let seed = i as u64 * SEED_STRIDE + k;
-            world.desc.render.spp = spp;
-            world.desc.render.seed = seed;
-            let film = crate::new_film(&world.desc, &a.scene)?;
-            let tracer = tracer::Tracer::new(&world);
-            let t = Instant::now();
-            let film = crate::render_film(&tracer, pool, !a.quiet, film, &a.scene)?;
-            let seconds = t.elapsed().as_secs_f64();
-            let m = images::metrics(film.pixels.as_flattened(), &reference.data);
-            let row = Row {
-                spp,
-                seed,
-                seconds,
-                rmse: m.rmse,
-                relmse: m.relmse,
-            };
-            if !a.quiet {
-                eprintln!(
-                    "converge: [{}/{total}] spp {spp} seed {seed}: {seconds:.3} s, rmse {:.6}, relmse {:.6}",
-                    rows.len() + 1,
-                    row.rmse,
-                    row.relmse
-                );
-            }
-            rows.push(row);
-        }
-    }
+    let mut world = scene::build_world(&file, desc, &a.plugin_path, pool)?;
+    let rows = render_all(&a, &mut world, &spps, &reference, pool)?;
 
     let samples: Vec<(u32, f64, f64)> = rows.iter().map(|r| (r.spp, r.seconds, r.rmse)).collect();
     let rtk = curve("rtk", &samples);
@@ -438,7 +390,7 @@ pub fn run(a: ConvergeArgs, pool: &rayon::ThreadPool, threads: usize) -> Result<
     );
     let png = a.out.join("converge.png");
     let ratio_ok = ratio.as_ref().and_then(|r| r.as_ref().ok());
-    let png_bytes = crate::plot::converge_png(&title, &rtk, other.as_ref(), slope, ratio_ok)?;
+    let png_bytes = plot::converge_png(&title, &rtk, other.as_ref(), slope, ratio_ok)?;
     output::write_atomically(&png, |tmp| Ok(std::fs::write(tmp, &png_bytes)?))?;
 
     let json = a.out.join("converge.json");
@@ -463,6 +415,103 @@ pub fn run(a: ConvergeArgs, pool: &rayon::ThreadPool, threads: usize) -> Result<
         json.display()
     );
     Ok(())
+}
+
+/// The image errors are measured against (`--analytic`'s uniform one, or
+/// `--reference`, which must be the render's size) and its name in the
+/// outputs.
+fn reference_image(
+    a: &ConvergeArgs,
+    analytic: Option<&Analytic>,
+    w: u32,
+    h: u32,
+) -> Result<(Image, String)> {
+    let reference = match (analytic, &a.reference) {
+        (Some(an), _) => Image::uniform(w, h, an.radiance().map(|v| v as f32)),
+        (None, Some(p)) => {
+            let r = images::read(p)?;
+            if (r.width, r.height) != (w, h) {
+                bail!(
+                    "the reference {} is {}x{} but {} renders {w}x{h}: match them with --set render.width={} --set render.height={}",
+                    p.display(),
+                    r.width,
+                    r.height,
+                    a.scene.display(),
+                    r.width,
+                    r.height
+                );
+            }
+            r
+        }
+        (None, None) => bail!("give --reference FILE or --analytic SPEC"),
+    };
+    let reference_name = match (&a.analytic, &a.reference) {
+        (Some(s), _) => format!("analytic {s}"),
+        (None, Some(p)) => p.display().to_string(),
+        _ => String::new(),
+    };
+    Ok((reference, reference_name))
+}
+
+/// Render the world at each sample count with `--seeds` seeds, timing each
+/// render (the render only) and measuring it against `reference`.
+fn render_all(
+    a: &ConvergeArgs,
+    world: &mut rtk_shell::World,
+    spps: &[u32],
+    reference: &Image,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<Row>> {
+    let total = spps.len() * a.seeds as usize;
+    let mut rows = Vec::with_capacity(total);
+    for (i, &spp) in spps.iter().enumerate() {
+        for k in 1..=a.seeds as u64 {
+            let seed = i as u64 * SEED_STRIDE + k;
+            world.desc.render.spp = spp;
+            world.desc.render.seed = seed;
+            let film = new_film(&world.desc, &a.scene)?;
+            let tracer = tracer::Tracer::new(world);
+            let t = Instant::now();
+            let film = render_film(&tracer, pool, !a.quiet, film, &a.scene)?;
+            let seconds = t.elapsed().as_secs_f64();
+            let m = images::metrics(film.pixels.as_flattened(), &reference.data);
+            let row = Row {
+                spp,
+                seed,
+                seconds,
+                rmse: m.rmse,
+                relmse: m.relmse,
+            };
+            if !a.quiet {
+                eprintln!(
+                    "converge: [{}/{total}] spp {spp} seed {seed}: {seconds:.3} s, rmse {:.6}, relmse {:.6}",
+                    rows.len() + 1,
+                    row.rmse,
+                    row.relmse
+                );
+            }
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
+/// A black film of the scene's image size (allocated fallibly).
+fn new_film(desc: &rtk_shell::Desc, scene: &Path) -> Result<Film> {
+    Film::new(desc.render.width, desc.render.height)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", scene.display()))
+}
+
+/// Render the world (its `[render]` settings: size, spp, seed) into `film`.
+fn render_film(
+    tracer: &tracer::Tracer,
+    pool: &rayon::ThreadPool,
+    progress: bool,
+    film: Film,
+    scene: &Path,
+) -> Result<Film> {
+    render_loop::render(tracer, pool, progress, film)
+        .map_err(|m| anyhow::anyhow!("rendering {} failed: {m}", scene.display()))
 }
 
 /// The CSV: the required columns first, then extras.

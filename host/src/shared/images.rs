@@ -238,6 +238,39 @@ pub fn pfm_bytes(img: &Image) -> Vec<u8> {
 /// A NumPy `.npy` array of float32 or float64, C order, shape (H, W, C)
 /// (C = 1: grey; C >= 3: the first three channels) or (H, W); row 0 at the top.
 pub fn parse_npy(bytes: &[u8]) -> Result<Image> {
+    let (header, start) = npy_header(bytes)?;
+    let dtype = npy_dtype(header)?;
+    if npy_value(header, "fortran_order")? != "False" {
+        bail!(".npy in Fortran order is not supported: save it C-contiguous");
+    }
+    let shape_s = npy_value(header, "shape")?;
+    let (h, w, channels) = npy_shape(shape_s)?;
+    let n = pixel_count(w, h)?;
+    let body = &bytes[start..];
+    let need = (n as u64)
+        .checked_mul(channels as u64 * dtype.size as u64)
+        .context(".npy too large")?;
+    if (body.len() as u64) < need {
+        bail!(
+            ".npy {shape_s}: {need} bytes of data expected, the file holds {}",
+            body.len()
+        );
+    }
+    let mut data = Vec::with_capacity(n * 3);
+    for p in 0..n {
+        for c in 0..3 {
+            data.push(dtype.value(body, p * channels + c.min(channels - 1)));
+        }
+    }
+    Ok(Image {
+        width: w as u32,
+        height: h as u32,
+        data,
+    })
+}
+
+/// The header dict of a .npy file (versions 1 to 3) and where its data starts.
+fn npy_header(bytes: &[u8]) -> Result<(&str, usize)> {
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         bail!("not a .npy file");
     }
@@ -253,6 +286,42 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Image> {
         .get(start..start + header_len)
         .context(".npy header truncated")?;
     let header = std::str::from_utf8(header).context(".npy header is not text")?;
+    Ok((header, start + header_len))
+}
+
+/// A .npy element type rtk reads: float32 or float64, either byte order.
+#[derive(Clone, Copy)]
+struct NpyFloat {
+    /// Bytes per value: 4 or 8.
+    size: usize,
+    little: bool,
+}
+
+impl NpyFloat {
+    /// Value `i` of `body`, as f32.
+    fn value(self, body: &[u8], i: usize) -> f32 {
+        let o = i * self.size;
+        if self.size == 4 {
+            let b = [body[o], body[o + 1], body[o + 2], body[o + 3]];
+            if self.little {
+                f32::from_le_bytes(b)
+            } else {
+                f32::from_be_bytes(b)
+            }
+        } else {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(&body[o..o + 8]);
+            (if self.little {
+                f64::from_le_bytes(b)
+            } else {
+                f64::from_be_bytes(b)
+            }) as f32
+        }
+    }
+}
+
+/// The header's `descr`, when it is a type rtk reads.
+fn npy_dtype(header: &str) -> Result<NpyFloat> {
     let descr = npy_value(header, "descr")?;
     let descr = descr.trim_matches(|c| c == '\'' || c == '"');
     let (size, little) = match descr {
@@ -262,10 +331,12 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Image> {
         ">f8" => (8, false),
         d => bail!(".npy dtype `{d}` is not supported: float32 or float64"),
     };
-    if npy_value(header, "fortran_order")? != "False" {
-        bail!(".npy in Fortran order is not supported: save it C-contiguous");
-    }
-    let shape_s = npy_value(header, "shape")?;
+    Ok(NpyFloat { size, little })
+}
+
+/// Height, width and channels from the header's `shape` text: (H, W, C)
+/// with C = 1 or C >= 3, or (H, W).
+fn npy_shape(shape_s: &str) -> Result<(u64, u64, usize)> {
     let shape: Vec<u64> = shape_s
         .trim_matches(|c| c == '(' || c == ')')
         .split(',')
@@ -274,51 +345,10 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Image> {
         .map(|s| s.parse::<u64>())
         .collect::<Result<_, _>>()
         .map_err(|_| anyhow::anyhow!(".npy shape `{shape_s}` is not a tuple of integers"))?;
-    let (h, w, channels) = match shape[..] {
+    Ok(match shape[..] {
         [h, w] => (h, w, 1),
         [h, w, c] if c == 1 || c >= 3 => (h, w, c as usize),
         _ => bail!(".npy shape {shape_s}: expected (H, W, 3), (H, W, 1) or (H, W)"),
-    };
-    let n = pixel_count(w, h)?;
-    let body = &bytes[start + header_len..];
-    let need = (n as u64)
-        .checked_mul(channels as u64 * size as u64)
-        .context(".npy too large")?;
-    if (body.len() as u64) < need {
-        bail!(
-            ".npy {shape_s}: {need} bytes of data expected, the file holds {}",
-            body.len()
-        );
-    }
-    let value = |i: usize| -> f32 {
-        let o = i * size;
-        if size == 4 {
-            let b = [body[o], body[o + 1], body[o + 2], body[o + 3]];
-            if little {
-                f32::from_le_bytes(b)
-            } else {
-                f32::from_be_bytes(b)
-            }
-        } else {
-            let mut b = [0u8; 8];
-            b.copy_from_slice(&body[o..o + 8]);
-            (if little {
-                f64::from_le_bytes(b)
-            } else {
-                f64::from_be_bytes(b)
-            }) as f32
-        }
-    };
-    let mut data = Vec::with_capacity(n * 3);
-    for p in 0..n {
-        for c in 0..3 {
-            data.push(value(p * channels + c.min(channels - 1)));
-        }
-    }
-    Ok(Image {
-        width: w as u32,
-        height: h as u32,
-        data,
     })
 }
 

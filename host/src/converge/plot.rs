@@ -93,6 +93,9 @@ pub fn converge_png(
 
 type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
+/// The log-log chart the curves are drawn on.
+type Chart<'a, 'b> = ChartContext<'a, BitMapBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+
 fn draw(
     buf: &mut [u8],
     title: &str,
@@ -113,19 +116,6 @@ fn draw(
     let (x0, x1) = log_range(all().flat_map(|p| [p.seconds_range.0, p.seconds_range.1]));
     let (y0, y1) = log_range(all().flat_map(|p| [p.rmse_range.0, p.rmse_range.1]));
 
-    let slope_s = slope.map_or("n/a".into(), |s| format!("{s:.3}"));
-    let mut caption = format!("RMSE against render time: fitted slope {slope_s}");
-    if let Some(r) = ratio {
-        caption += &format!(
-            ", equal-error time ratio {}{}",
-            tick(&r.ratio),
-            if r.extrapolated {
-                " (extrapolated)"
-            } else {
-                ""
-            }
-        );
-    }
     let (top, body) = root.split_vertically(40);
     top.draw(&Text::new(
         title.to_string(),
@@ -133,7 +123,7 @@ fn draw(
         ("sans-serif", 18).into_font().color(&BLACK),
     ))?;
     let mut chart = ChartBuilder::on(&body)
-        .caption(caption, ("sans-serif", 22))
+        .caption(caption(slope, ratio), ("sans-serif", 22))
         .margin(20)
         .x_label_area_size(55)
         .y_label_area_size(80)
@@ -149,7 +139,48 @@ fn draw(
         .light_line_style(RGBColor(235, 235, 235))
         .draw()?;
 
-    // The -1/2 guide through rtk's first usable median.
+    draw_guide(&mut chart, rtk, (x0, x1), (y0, y1))?;
+    for (c, colour) in curves.iter().zip([RTK, OTHER]) {
+        draw_curve(&mut chart, c, colour)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .label_font(("sans-serif", 16))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+/// The chart's caption: the fitted slope and, against another renderer,
+/// the equal-error time ratio.
+fn caption(slope: Option<f64>, ratio: Option<&Ratio>) -> String {
+    let slope_s = slope.map_or("n/a".into(), |s| format!("{s:.3}"));
+    let mut caption = format!("RMSE against render time: fitted slope {slope_s}");
+    if let Some(r) = ratio {
+        caption += &format!(
+            ", equal-error time ratio {}{}",
+            tick(&r.ratio),
+            if r.extrapolated {
+                " (extrapolated)"
+            } else {
+                ""
+            }
+        );
+    }
+    caption
+}
+
+/// The -1/2 guide through rtk's first usable median, within the chart's
+/// ranges: where a Monte Carlo renderer's curve should run parallel.
+fn draw_guide(
+    chart: &mut Chart,
+    rtk: &Curve,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> DrawResult {
     if let Some(p) = rtk.points.iter().find(|p| usable(p)) {
         let n = 64;
         let guide: Vec<(f64, f64)> = (0..=n)
@@ -162,47 +193,42 @@ fn draw(
             .label("slope -1/2")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], GUIDE.stroke_width(2)));
     }
+    Ok(())
+}
 
-    for (c, colour) in curves.iter().zip([RTK, OTHER]) {
-        let pts: Vec<&Point> = c.points.iter().filter(|p| usable(p)).collect();
-        let style = colour.stroke_width(2);
-        // The spread over seeds: RMSE min..max (vertical) and time min..max
-        // (horizontal) through each median.
-        for p in &pts {
-            let cap = |a: (f64, f64), b: (f64, f64)| PathElement::new(vec![a, b], style);
-            chart.draw_series([
-                cap((p.seconds, p.rmse_range.0), (p.seconds, p.rmse_range.1)),
-                cap((p.seconds_range.0, p.rmse), (p.seconds_range.1, p.rmse)),
-            ])?;
-        }
-        chart
-            .draw_series(LineSeries::new(
-                pts.iter().map(|p| (p.seconds, p.rmse)),
-                style,
-            ))?
-            .label(format!("{} (median over seeds; bars: min..max)", c.label))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
-        chart.draw_series(
-            pts.iter()
-                .map(|p| Circle::new((p.seconds, p.rmse), 5, colour.filled())),
-        )?;
-        chart.draw_series(pts.iter().map(|p| {
-            EmptyElement::at((p.seconds, p.rmse))
-                + Text::new(
-                    format!("{} spp", p.spp),
-                    (8, 4),
-                    ("sans-serif", 14).into_font().color(&colour),
-                )
-        }))?;
+/// One renderer's curve: its medians joined, each with its spread over
+/// seeds as bars and labelled with its spp.
+fn draw_curve(chart: &mut Chart, c: &Curve, colour: RGBColor) -> DrawResult {
+    let pts: Vec<&Point> = c.points.iter().filter(|p| usable(p)).collect();
+    let style = colour.stroke_width(2);
+    // The spread over seeds: RMSE min..max (vertical) and time min..max
+    // (horizontal) through each median.
+    for p in &pts {
+        let cap = |a: (f64, f64), b: (f64, f64)| PathElement::new(vec![a, b], style);
+        chart.draw_series([
+            cap((p.seconds, p.rmse_range.0), (p.seconds, p.rmse_range.1)),
+            cap((p.seconds_range.0, p.rmse), (p.seconds_range.1, p.rmse)),
+        ])?;
     }
     chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font(("sans-serif", 16))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
+        .draw_series(LineSeries::new(
+            pts.iter().map(|p| (p.seconds, p.rmse)),
+            style,
+        ))?
+        .label(format!("{} (median over seeds; bars: min..max)", c.label))
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+    chart.draw_series(
+        pts.iter()
+            .map(|p| Circle::new((p.seconds, p.rmse), 5, colour.filled())),
+    )?;
+    chart.draw_series(pts.iter().map(|p| {
+        EmptyElement::at((p.seconds, p.rmse))
+            + Text::new(
+                format!("{} spp", p.spp),
+                (8, 4),
+                ("sans-serif", 14).into_font().color(&colour),
+            )
+    }))?;
     Ok(())
 }
 

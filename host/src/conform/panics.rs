@@ -129,7 +129,7 @@ fn hot(kind: Kind, w: &World) -> Option<String> {
             failure(&ctx)
         }
         Kind::Integrator => {
-            let t = crate::tracer::Tracer::new(w);
+            let t = crate::render::tracer::Tracer::new(w);
             let ray = Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z);
             t.camera_li(&mut ctx, &ray);
             failure(&ctx)

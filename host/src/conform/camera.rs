@@ -75,10 +75,36 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
         }
     }
     suite.at("finite");
+    let rays = finite_rays(cam, &mut ctx, &samples, suite)?;
+    suite.at("pixel-centres");
+    suite.push(pixel_centres(cam, &mut ctx, width, height)?);
+    suite.at("not-mirrored");
+    suite.push(not_mirrored(cam, &mut ctx)?);
+    suite.at("deterministic");
+    suite.push(deterministic(cam, &mut ctx, &samples, &rays)?);
+    suite.at("concurrent-queries");
+    suite.push(concurrent_queries(cam, &samples, &rays, cx.threads));
+    drop(w);
+
+    suite.at("unknown-key-refused");
+    let c = unknown_key(cx, 0);
+    suite.push(c);
+    super::panics::run(cx, suite, 0)?;
+    Ok(())
+}
+
+/// `finite`, `unit-directions` and `time-in-shutter` over the rays of
+/// `samples`; returns the rays with their weights.
+fn finite_rays(
+    cam: &Camera,
+    ctx: &mut TraceCtx,
+    samples: &[CameraSample],
+    suite: &mut Suite,
+) -> Result<Vec<(Ray, f32)>> {
     let (mut nonfinite, mut unit, mut time) = Default::default();
     let mut rays = Vec::with_capacity(samples.len());
-    for s in &samples {
-        let (r, wt) = ray_of(cam, &mut ctx, s)?;
+    for s in samples {
+        let (r, wt) = ray_of(cam, ctx, s)?;
         let what = || format!("film {:?} lens {:?} time {:?}", s.film, s.lens, s.time);
         if !(r.origin.is_finite()
             && r.dir.is_finite()
@@ -106,8 +132,12 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
     suite.push(Check::held("finite", &nonfinite, n, "rays"));
     suite.push(Check::held("unit-directions", &unit, n, "rays"));
     suite.push(Check::held("time-in-shutter", &time, n, "rays"));
+    Ok(rays)
+}
 
-    suite.at("pixel-centres");
+/// `pixel-centres`: every pixel centre of the `width` x `height` image maps
+/// to a ray of positive weight, no two to the same ray.
+fn pixel_centres(cam: &Camera, ctx: &mut TraceCtx, width: u32, height: u32) -> Result<Check> {
     let mut seen = std::collections::HashMap::new();
     let mut centres = (0u64, String::new());
     for y in 0..height {
@@ -120,7 +150,7 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
                 lens: [0.5, 0.5],
                 time: 0.5,
             };
-            let (r, wt) = ray_of(cam, &mut ctx, &s)?;
+            let (r, wt) = ray_of(cam, ctx, &s)?;
             if !(wt > 0.0) {
                 note(&mut centres, || format!("pixel ({x}, {y}): weight {wt}"));
             }
@@ -134,7 +164,7 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
         }
     }
     let pixels = (width * height) as u64;
-    suite.push(Check::new(
+    Ok(Check::new(
         "pixel-centres",
         centres.0 == 0,
         if centres.0 == 0 {
@@ -142,9 +172,11 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
         } else {
             format!("{} of {pixels} pixels: {}", centres.0, centres.1)
         },
-    ));
+    ))
+}
 
-    suite.at("not-mirrored");
+/// `not-mirrored`: film x runs right and y down, seen along the view.
+fn not_mirrored(cam: &Camera, ctx: &mut TraceCtx) -> Result<Check> {
     let at = |ctx: &mut TraceCtx, fx: f32, fy: f32| -> Result<(Vec3, Vec3)> {
         let (r, _) = ray_of(
             cam,
@@ -157,11 +189,11 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
         )?;
         Ok((r.origin.v() + r.dir.v(), r.dir.v()))
     };
-    let right = at(&mut ctx, 0.75, 0.5)?.0 - at(&mut ctx, 0.25, 0.5)?.0;
-    let down = at(&mut ctx, 0.5, 0.75)?.0 - at(&mut ctx, 0.5, 0.25)?.0;
-    let forward = at(&mut ctx, 0.5, 0.5)?.1;
+    let right = at(ctx, 0.75, 0.5)?.0 - at(ctx, 0.25, 0.5)?.0;
+    let down = at(ctx, 0.5, 0.75)?.0 - at(ctx, 0.5, 0.25)?.0;
+    let forward = at(ctx, 0.5, 0.5)?.1;
     let handed = right.cross(down).dot(forward);
-    suite.push(Check::new(
+    Ok(Check::new(
         "not-mirrored",
         handed > 0.0,
         if handed > 0.0 {
@@ -174,26 +206,46 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
                 forward.to_array()
             )
         },
-    ));
+    ))
+}
 
-    suite.at("deterministic");
+/// `deterministic`: the samples again, in reverse order, give the same
+/// rays bit for bit.
+fn deterministic(
+    cam: &Camera,
+    ctx: &mut TraceCtx,
+    samples: &[CameraSample],
+    rays: &[(Ray, f32)],
+) -> Result<Check> {
     let mut again = (0u64, String::new());
-    for (s, (r, wt)) in samples.iter().zip(&rays).rev() {
-        let (r2, w2) = ray_of(cam, &mut ctx, s)?;
+    for (s, (r, wt)) in samples.iter().zip(rays).rev() {
+        let (r2, w2) = ray_of(cam, ctx, s)?;
         if bits(r, *wt) != bits(&r2, w2) {
             note(&mut again, || {
                 format!("film {:?}: {r:?} then {r2:?}", s.film)
             });
         }
     }
-    suite.push(Check::held("deterministic", &again, n, "rays"));
+    Ok(Check::held(
+        "deterministic",
+        &again,
+        samples.len() as u64,
+        "rays",
+    ))
+}
 
-    suite.at("concurrent-queries");
-    let threads = cx.threads;
+/// `concurrent-queries`: every thread at once, twice over the samples,
+/// gets one thread's rays.
+fn concurrent_queries(
+    cam: &Camera,
+    samples: &[CameraSample],
+    rays: &[(Ray, f32)],
+    threads: usize,
+) -> Check {
     let bad = std::sync::atomic::AtomicU64::new(0);
     std::thread::scope(|sc| {
         for ti in 0..threads {
-            let (samples, rays, bad) = (&samples, &rays, &bad);
+            let bad = &bad;
             sc.spawn(move || {
                 let mut ctx = TraceCtx::new(ti as u32, threads as u32, 0);
                 for _ in 0..2 {
@@ -207,18 +259,11 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
             });
         }
     });
-    let of = n * 2 * threads as u64;
+    let of = samples.len() as u64 * 2 * threads as u64;
     let bad = bad.into_inner();
-    suite.push(Check::new(
+    Check::new(
         "concurrent-queries",
         bad == 0,
         format!("{threads} threads: {bad} of {of} rays differ from one thread's"),
-    ));
-    drop(w);
-
-    suite.at("unknown-key-refused");
-    let c = unknown_key(cx, 0);
-    suite.push(c);
-    crate::conform_panics::run(cx, suite, 0)?;
-    Ok(())
+    )
 }

@@ -15,7 +15,7 @@
 //! | 4 × 4 | the rectangle held: x0, y0, x1, y1 |
 //! | 28 per pixel | row-major over the rectangle: the f64 sums of R, G, B, then the u32 sample count |
 
-use crate::render::{Accum, Rect};
+use crate::render::render_loop::{Accum, Rect};
 use anyhow::{bail, Context, Result};
 use rtk_shell::desc::render::Filter;
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -154,7 +154,7 @@ impl Header {
 
 /// Write `accum` with `header` to `path` atomically (temporary file, then rename).
 pub fn write(path: &Path, header: &Header, accum: &Accum) -> Result<()> {
-    crate::output::write_atomically(path, |tmp| {
+    crate::shared::output::write_atomically(path, |tmp| {
         let f = std::fs::File::create(tmp)?;
         let mut w = BufWriter::new(f);
         w.write_all(MAGIC)?;
@@ -199,8 +199,26 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
         bail!("{}: not a regular file", path.display());
     }
     let mut r = BufReader::new(f);
+    let (header, rect) = read_header(path, &mut r, meta.len())?;
+    let want = HEADER_BYTES + rect.len() as u64 * PIXEL_BYTES;
+    if meta.len() != want {
+        bail!(
+            "{}: the film file is {} bytes, its header says {want}: truncated or damaged",
+            path.display(),
+            meta.len()
+        );
+    }
+    let mut accum = Accum::new(header.width, header.height, rect)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
+    read_pixels(path, &mut r, &header, &mut accum)?;
+    Ok((header, accum))
+}
+
+/// The header of a film file of `len` bytes and the rectangle of the image
+/// it holds, refused unless it is a film file and its values make sense.
+fn read_header(path: &Path, r: &mut impl Read, len: u64) -> Result<(Header, Rect)> {
     let mut head = [0u8; HEADER_BYTES as usize];
-    if meta.len() < HEADER_BYTES || r.read_exact(&mut head).is_err() || &head[..8] != MAGIC {
+    if len < HEADER_BYTES || r.read_exact(&mut head).is_err() || &head[..8] != MAGIC {
         bail!(
             "{} is not an rtk film file (checkpoint or crop): it does not start with {}",
             path.display(),
@@ -241,19 +259,16 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
             header.spp
         );
     }
-    let want = HEADER_BYTES + rect.len() as u64 * PIXEL_BYTES;
-    if meta.len() != want {
-        bail!(
-            "{}: the film file is {} bytes, its header says {want}: truncated or damaged",
-            path.display(),
-            meta.len()
-        );
-    }
-    let mut accum = Accum::new(header.width, header.height, rect)
-        .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
+    Ok((header, rect))
+}
+
+/// Fill `accum` with the pixels that follow the header, refusing sums that
+/// are not finite and counts above the film's spp (a damaged file).
+fn read_pixels(path: &Path, r: &mut impl Read, header: &Header, accum: &mut Accum) -> Result<()> {
     let mut px = [0u8; PIXEL_BYTES as usize];
     for (s, c) in accum.sums.iter_mut().zip(accum.counts.iter_mut()) {
-        r.read_exact(&mut px).with_context(what)?;
+        r.read_exact(&mut px)
+            .with_context(|| format!("reading the film file {}", path.display()))?;
         *s = [
             f64::from_bits(u64_at(&px, 0)),
             f64::from_bits(u64_at(&px, 8)),
@@ -275,7 +290,7 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
             );
         }
     }
-    Ok((header, accum))
+    Ok(())
 }
 
 /// Parse `--crop x0,y0,x1,y1` against the image size.
@@ -296,83 +311,6 @@ pub fn parse_crop(s: &str, width: u32, height: u32) -> Result<Rect> {
         );
     }
     Ok(Rect { x0, y0, x1, y1 })
-}
-
-/// `rtk merge OUT PARTS...`: stitch crop films (complete, of one scene and
-/// settings, not overlapping, covering the image) into the full image.
-pub fn merge(out: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
-    let film_out = is_film_path(out);
-    crate::output::check_writable(out)?;
-    let Some(first) = parts.first() else {
-        bail!("rtk merge: name at least one crop file");
-    };
-    let mut header0: Option<Header> = None;
-    let mut full: Option<Accum> = None;
-    let mut covered: Vec<bool> = Vec::new();
-    for p in parts {
-        let (h, part) = read(p)?;
-        match &header0 {
-            Some(h0) => h.check_matches(h0, p, first)?,
-            None => {
-                header0 = Some(h);
-                let rect = Rect::full(h.width, h.height);
-                covered = vec![false; rect.len()];
-                full = Some(Accum::new(h.width, h.height, rect).map_err(anyhow::Error::msg)?);
-            }
-        }
-        let Some(full) = full.as_mut() else {
-            bail!("rtk merge: no film");
-        };
-        let (min, _) = part.sample_range();
-        if min < h.spp {
-            bail!(
-                "{} is incomplete: some pixels have {min} of {} samples; finish it with --resume before merging",
-                p.display(),
-                h.spp
-            );
-        }
-        let r = part.rect;
-        let w = full.full_width as usize;
-        for y in r.y0..r.y1 {
-            for x in r.x0..r.x1 {
-                let i = (y - r.y0) as usize * r.width() as usize + (x - r.x0) as usize;
-                let j = y as usize * w + x as usize;
-                if covered[j] {
-                    bail!("{} overlaps another crop at pixel ({x}, {y})", p.display());
-                }
-                covered[j] = true;
-                full.sums[j] = part.sums[i];
-                full.counts[j] = part.counts[i];
-            }
-        }
-    }
-    let (Some(h), Some(full)) = (header0, full) else {
-        bail!("rtk merge: nothing to merge");
-    };
-    if let Some(j) = covered.iter().position(|c| !c) {
-        let n = covered.iter().filter(|c| !**c).count();
-        bail!(
-            "the crops leave {n} pixels of the {}x{} image uncovered, the first ({}, {})",
-            h.width,
-            h.height,
-            j % h.width as usize,
-            j / h.width as usize
-        );
-    }
-    if film_out {
-        write(out, &h, &full)?;
-    } else {
-        crate::output::write(&full.into_film(), out)?;
-    }
-    eprintln!(
-        "merged {} crops into {} ({}x{}, {} spp)",
-        parts.len(),
-        out.display(),
-        h.width,
-        h.height,
-        h.spp
-    );
-    Ok(())
 }
 
 /// Does `path` name a film file (`.rtkfilm`)?

@@ -1,15 +1,22 @@
 //! `rtk conform PLUGIN_FILE`: the conformance suite rtk's own plugins pass,
 //! run against any plugin library, built anywhere. One suite per kind:
-//! objects and aggregates (conform_object.rs), shaders (conform_shader.rs),
-//! cameras, lights and integrators (conform_camera.rs, conform_light.rs,
-//! conform_integrator.rs); every kind also gets `unknown-key-refused` and,
-//! given `--panic-param`, `panics-reported` (conform_panics.rs). One line
-//! per check (pass, FAIL or skip); a non-zero exit on any failure.
+//! objects and aggregates (object.rs), shaders (shader.rs), cameras,
+//! lights and integrators (camera.rs, light.rs, integrator.rs); every kind
+//! also gets `unknown-key-refused` and, given `--panic-param`,
+//! `panics-reported` (panics.rs). One line per check (pass, FAIL or skip); a
+//! non-zero exit on any failure.
 //!
 //! The plugin is created with `--params` (default: none; when it refuses
 //! none, the first TOML example of its README it accepts). A failure of
 //! the plugin during a check (a refusal, a panic caught at the boundary)
 //! fails that check with the plugin's message and ends the run there.
+
+mod camera;
+mod integrator;
+mod light;
+mod object;
+mod panics;
+mod shader;
 
 use crate::stress::{header, Bench, Size};
 use anyhow::{bail, Context, Result};
@@ -431,7 +438,7 @@ pub(crate) struct Cx<'a> {
     /// --oracle-params.
     pub oracle_params: Params,
     /// --children.
-    pub children: Option<crate::conform_object::Shape>,
+    pub children: Option<object::Shape>,
     pub bench: Bench<'a>,
     pub rng: RngState,
     /// Threads queries may come from (the pool's).
@@ -550,13 +557,67 @@ pub(crate) fn brief(e: &str) -> String {
 
 /// Run `rtk conform`.
 pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
-    // Say what is wrong with the path before guessing a class from its name.
+    let plugin = load_plugin(&a)?;
+    let class = plugin.class.clone();
+    let kind = plugin.kind;
+    // A plugin folder holding just this library, searched first.
+    let folder = tempfile::Builder::new().prefix("rtk-conform").tempdir()?;
+    let lib = folder
+        .path()
+        .join(rtk_shell::plugins::library_file_name(&class));
+    std::fs::copy(&a.plugin, &lib)
+        .with_context(|| format!("copying {} to {}", a.plugin.display(), lib.display()))?;
+    let size = if a.quick { Size::Quick } else { Size::Full };
+    let mut extra = vec![folder.path().to_path_buf()];
+    extra.extend(a.plugin_path.iter().cloned());
+    let bench = Bench::new(size, &extra, pool)?;
+    check_object_flags(&a, kind, &class, &extra)?;
+    let mut cx = Cx {
+        args: &a,
+        class: class.clone(),
+        kind,
+        params: Params::parse(a.params.as_deref(), "--params")?,
+        oracle_params: Params::parse(a.oracle_params.as_deref(), "--oracle-params")?,
+        children: a
+            .children
+            .as_deref()
+            .map(object::parse_children)
+            .transpose()?,
+        bench,
+        rng: RngState::seeded(0xC0F0),
+        // Queries may come from as many threads as the scenes were built for.
+        threads: pool.current_num_threads().max(1),
+        quick: a.quick,
+        doc: plugin.doc,
+    };
+    let mut suite = Suite {
+        checks: Vec::new(),
+        phase: "create",
+        skip: a.skip.clone(),
+    };
+    let label = run_suite(kind, plugin.shader_module, &mut cx, &mut suite)?;
+    apply_skips(&a, label, &mut suite)?;
+    report(&a, &class, label, &cx.params, suite.checks)
+}
+
+/// The plugin under test as loaded: its class, kind, README and (for a
+/// shader) its module.
+struct Loaded {
+    class: String,
+    kind: Kind,
+    doc: String,
+    shader_module: Option<rtk_kernel::abi::ShaderModuleRef>,
+}
+
+/// Load `a.plugin`, saying what is wrong with the path before guessing a
+/// class from its name; refuse kinds without a suite.
+fn load_plugin(a: &ConformArgs) -> Result<Loaded> {
     match std::fs::metadata(&a.plugin) {
         Err(e) => bail!("{}: {e}", a.plugin.display()),
         Ok(m) if !m.is_file() => bail!("{}: not a regular file", a.plugin.display()),
         Ok(_) => {}
     }
-    let class = class_of(&a)?;
+    let class = class_of(a)?;
     let plugin = rtk_shell::plugins::load(&a.plugin, Some(&class))
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.plugin.display()))?;
     let kind = match plugin.kind.name() {
@@ -575,60 +636,49 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
         rtk_shell::plugins::Module::Shader(m) => Some(m),
         _ => None,
     };
-    // A plugin folder holding just this library, searched first.
-    let folder = tempfile::Builder::new().prefix("rtk-conform").tempdir()?;
-    let lib = folder
-        .path()
-        .join(rtk_shell::plugins::library_file_name(&class));
-    std::fs::copy(&a.plugin, &lib)
-        .with_context(|| format!("copying {} to {}", a.plugin.display(), lib.display()))?;
-    let size = if a.quick { Size::Quick } else { Size::Full };
-    let mut extra = vec![folder.path().to_path_buf()];
-    extra.extend(a.plugin_path.iter().cloned());
-    let bench = Bench::new(size, &extra, pool)?;
+    Ok(Loaded {
+        class,
+        kind,
+        doc,
+        shader_module,
+    })
+}
+
+/// `--children` and `--oracle` are for object plugins, and the oracle must
+/// be a class on the plugin path (`extra` first): a misspelt one is a usage
+/// error, said before any check runs (not a failed check of the plugin).
+fn check_object_flags(a: &ConformArgs, kind: Kind, class: &str, extra: &[PathBuf]) -> Result<()> {
     if a.children.is_some() && kind != Kind::Object {
         bail!("--children is for object plugins; `{class}` is a {kind:?} plugin");
     }
     if a.oracle.is_some() && kind != Kind::Object {
         bail!("--oracle is for object plugins; `{class}` is a {kind:?} plugin");
     }
-    // A misspelt oracle is a usage error, said before any check runs (not a
-    // failed check of the plugin under test).
     if let Some(o) = &a.oracle {
         let file = rtk_shell::plugins::library_file_name(o);
         if !rtk_shell::plugins::is_identifier(o) {
             bail!("--oracle: `{o}` is not a class name (letters, digits, _)");
         }
-        if rtk_shell::plugins::PluginPath::standard(&extra)
+        if rtk_shell::plugins::PluginPath::standard(extra)
             .find(o)
             .is_none()
         {
             bail!("--oracle: unknown class `{o}`: no {file} on the plugin path");
         }
     }
-    let mut cx = Cx {
-        args: &a,
-        class: class.clone(),
-        kind,
-        params: Params::parse(a.params.as_deref(), "--params")?,
-        oracle_params: Params::parse(a.oracle_params.as_deref(), "--oracle-params")?,
-        children: a
-            .children
-            .as_deref()
-            .map(crate::conform_object::parse_children)
-            .transpose()?,
-        bench,
-        rng: RngState::seeded(0xC0F0),
-        // Queries may come from as many threads as the scenes were built for.
-        threads: pool.current_num_threads().max(1),
-        quick: a.quick,
-        doc,
-    };
-    let mut suite = Suite {
-        checks: Vec::new(),
-        phase: "create",
-        skip: a.skip.clone(),
-    };
+    Ok(())
+}
+
+/// Run the kind's suite into `suite`; returns the suite's name (an object
+/// plugin that is an aggregate gets the aggregate suite). A plugin failure
+/// ends the run with a failed check of the phase it happened in; a usage
+/// error is returned.
+fn run_suite(
+    kind: Kind,
+    shader_module: Option<rtk_kernel::abi::ShaderModuleRef>,
+    cx: &mut Cx,
+    suite: &mut Suite,
+) -> Result<&'static str> {
     let mut label = match kind {
         Kind::Object => "object",
         Kind::Shader => "shader",
@@ -637,17 +687,17 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
         Kind::Integrator => "integrator",
     };
     let res = match kind {
-        Kind::Object => crate::conform_object::checks(&mut cx, &mut suite).map(|shape| {
+        Kind::Object => object::checks(cx, suite).map(|shape| {
             if shape.is_aggregate() {
                 label = "aggregate";
             }
         }),
         Kind::Shader => shader_module
             .context("the shader's module")
-            .and_then(|m| crate::conform_shader::checks(m, &mut cx, &mut suite)),
-        Kind::Camera => crate::conform_camera::checks(&mut cx, &mut suite),
-        Kind::Light => crate::conform_light::checks(&mut cx, &mut suite),
-        Kind::Integrator => crate::conform_integrator::checks(&mut cx, &mut suite),
+            .and_then(|m| shader::checks(m, cx, suite)),
+        Kind::Camera => camera::checks(cx, suite),
+        Kind::Light => light::checks(cx, suite),
+        Kind::Integrator => integrator::checks(cx, suite),
     };
     if let Err(e) = res {
         if e.downcast_ref::<Usage>().is_some() {
@@ -660,8 +710,12 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
             format!("stopped: {}", brief(&format!("{e:#}"))),
         ));
     }
-    // Every --skip must name a check of this suite (a misspelt one would
-    // silently run it).
+    Ok(label)
+}
+
+/// Every --skip must name a check of this suite (a misspelt one would
+/// silently run it); the checks it names are reported as skipped.
+fn apply_skips(a: &ConformArgs, label: &str, suite: &mut Suite) -> Result<()> {
     for s in &a.skip {
         if !suite.checks.iter().any(|c| c.name == s) {
             let names: Vec<&str> = suite.checks.iter().map(|c| c.name).collect();
@@ -676,7 +730,7 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
             *c = Check::skip(c.name, "--skip");
         }
     }
-    report(&a, &class, label, &cx.params, suite.checks)
+    Ok(())
 }
 
 /// Print the checks (lines or JSON); an error when any failed.

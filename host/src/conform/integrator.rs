@@ -23,7 +23,7 @@
 //! radiance (`normals` does not: `--skip` them).
 
 use crate::conform::{note, unknown_key, Check, Cx, Suite};
-use crate::tracer::Tracer;
+use crate::render::tracer::Tracer;
 use anyhow::{anyhow, Result};
 use rtk_kernel::abi::{Color, Hit, Ray, TraceCtx};
 use rtk_kernel::RngState;
@@ -172,93 +172,130 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
 
     if suite.wants("furnace") {
         suite.at("furnace");
-        let mut ctx = TraceCtx::new(0, 1, 0);
-        let (mut hit_ratio, mut miss_ratio) = ([vec![], vec![], vec![]], [vec![], vec![], vec![]]);
-        for (r, c) in rs.iter().zip(&est) {
-            let mut h = Hit::new();
-            let hits = w.root.intersect(&mut ctx, r, &mut h);
-            let (ratios, scale) = if hits {
-                (&mut hit_ratio, RHO)
-            } else {
-                (&mut miss_ratio, 1.0)
-            };
-            for (k, v) in c.to_array().into_iter().enumerate() {
-                ratios[k].push(v as f64 / (scale * L[k]) as f64);
-            }
-        }
-        let mut worst: Option<String> = None;
-        let mut shown = Vec::new();
-        for (what, ratios, expect) in [("hit", &hit_ratio, RHO), ("missed", &miss_ratio, 1.0)] {
-            if ratios[0].is_empty() {
-                continue;
-            }
-            let mut means = Vec::new();
-            for (k, ch) in ["r", "g", "b"].iter().enumerate() {
-                let (m, se) = mean_se(&ratios[k]);
-                means.push(format!("{m:.3}"));
-                if (m - 1.0).abs() > 5.0 * se + 0.01 && worst.is_none() {
-                    worst = Some(format!(
-                        "{} rays that {what} the sphere: mean {ch} = {:.4} ± {:.4} × the expected {:.3} ({expect}·L)",
-                        ratios[k].len(),
-                        m,
-                        se,
-                        expect * L[k]
-                    ));
-                }
-            }
-            shown.push(format!(
-                "{} rays that {what} it: {}",
-                ratios[0].len(),
-                means.join(", ")
-            ));
-        }
-        suite.push(match worst {
-            None => Check::pass(
-                "furnace",
-                format!(
-                    "ρ = {RHO} sphere under L = {L:?}: estimate / expected = 1 within noise ({})",
-                    shown.join("; ")
-                ),
-            ),
-            Some(w) => Check::new("furnace", false, w),
-        });
+        suite.push(furnace_check(&w, &rs, &est));
     }
     if suite.wants("black-without-light") {
         suite.at("black-without-light");
-        let lit = dark_est.iter().filter(|c| !c.is_black()).count();
-        let first = dark_est.iter().find(|c| !c.is_black());
-        suite.push(Check::new(
-            "black-without-light",
-            lit == 0,
-            match first {
-                None => format!("{} estimates, all 0", dark_est.len()),
-                Some(c) => format!(
-                    "{lit} of {} estimates are not 0 with no light and a black background; first: {c:?}",
-                    dark_est.len()
-                ),
-            },
-        ));
+        suite.push(black_without_light(&dark_est));
     }
 
     suite.at("deterministic");
-    let t = Tracer::new(&w);
+    {
+        let t = Tracer::new(&w);
+        suite.push(deterministic(&t, &rs, &est)?);
+        suite.at("concurrent-queries");
+        suite.push(concurrent_queries(&t, &rs, &est, cx.threads));
+    }
+    drop((w, dark_world, mixed_world));
+
+    suite.at("unknown-key-refused");
+    let c = unknown_key(cx, 0);
+    suite.push(c);
+    super::panics::run(cx, suite, 0)?;
+    Ok(())
+}
+
+/// `furnace`: in the furnace `w`, the estimates `est` of the rays `rs`
+/// that hit the sphere are ρ·L, those that miss it L, in the mean per
+/// channel within 5 standard errors.
+fn furnace_check(w: &World, rs: &[Ray], est: &[Color]) -> Check {
+    let mut ctx = TraceCtx::new(0, 1, 0);
+    let (mut hit_ratio, mut miss_ratio) = ([vec![], vec![], vec![]], [vec![], vec![], vec![]]);
+    for (r, c) in rs.iter().zip(est) {
+        let mut h = Hit::new();
+        let hits = w.root.intersect(&mut ctx, r, &mut h);
+        let (ratios, scale) = if hits {
+            (&mut hit_ratio, RHO)
+        } else {
+            (&mut miss_ratio, 1.0)
+        };
+        for (k, v) in c.to_array().into_iter().enumerate() {
+            ratios[k].push(v as f64 / (scale * L[k]) as f64);
+        }
+    }
+    let mut worst: Option<String> = None;
+    let mut shown = Vec::new();
+    for (what, ratios, expect) in [("hit", &hit_ratio, RHO), ("missed", &miss_ratio, 1.0)] {
+        if ratios[0].is_empty() {
+            continue;
+        }
+        let mut means = Vec::new();
+        for (k, ch) in ["r", "g", "b"].iter().enumerate() {
+            let (m, se) = mean_se(&ratios[k]);
+            means.push(format!("{m:.3}"));
+            if (m - 1.0).abs() > 5.0 * se + 0.01 && worst.is_none() {
+                worst = Some(format!(
+                    "{} rays that {what} the sphere: mean {ch} = {:.4} ± {:.4} × the expected {:.3} ({expect}·L)",
+                    ratios[k].len(),
+                    m,
+                    se,
+                    expect * L[k]
+                ));
+            }
+        }
+        shown.push(format!(
+            "{} rays that {what} it: {}",
+            ratios[0].len(),
+            means.join(", ")
+        ));
+    }
+    match worst {
+        None => Check::pass(
+            "furnace",
+            format!(
+                "ρ = {RHO} sphere under L = {L:?}: estimate / expected = 1 within noise ({})",
+                shown.join("; ")
+            ),
+        ),
+        Some(w) => Check::new("furnace", false, w),
+    }
+}
+
+/// `black-without-light`: with no light and a black background every
+/// estimate is 0.
+fn black_without_light(dark_est: &[Color]) -> Check {
+    let lit = dark_est.iter().filter(|c| !c.is_black()).count();
+    let first = dark_est.iter().find(|c| !c.is_black());
+    Check::new(
+        "black-without-light",
+        lit == 0,
+        match first {
+            None => format!("{} estimates, all 0", dark_est.len()),
+            Some(c) => format!(
+                "{lit} of {} estimates are not 0 with no light and a black background; first: {c:?}",
+                dark_est.len()
+            ),
+        },
+    )
+}
+
+/// `deterministic`: each ray again (in reverse order), with its own
+/// random stream, gives the same estimate bit for bit.
+fn deterministic(t: &Tracer, rs: &[Ray], est: &[Color]) -> Result<Check> {
     let mut ctx = TraceCtx::new(0, 1, 0);
     let mut again = (0u64, String::new());
-    for (i, (r, c)) in rs.iter().zip(&est).enumerate().rev() {
-        let c2 = li(&t, &mut ctx, r, i)?;
+    for (i, (r, c)) in rs.iter().zip(est).enumerate().rev() {
+        let c2 = li(t, &mut ctx, r, i)?;
         if bits(c) != bits(&c2) {
             note(&mut again, || format!("ray {i}: {c:?} then {c2:?}"));
         }
     }
-    suite.push(Check::held("deterministic", &again, n as u64, "estimates"));
+    Ok(Check::held(
+        "deterministic",
+        &again,
+        rs.len() as u64,
+        "estimates",
+    ))
+}
 
-    suite.at("concurrent-queries");
-    let threads = cx.threads;
-    let m = n.min(1000);
+/// `concurrent-queries`: every thread at once, twice over the first
+/// thousand rays, gets one thread's estimates.
+fn concurrent_queries(t: &Tracer, rs: &[Ray], est: &[Color], threads: usize) -> Check {
+    let m = rs.len().min(1000);
     let differ = std::sync::atomic::AtomicU64::new(0);
     std::thread::scope(|sc| {
         for ti in 0..threads {
-            let (rs, est, differ, t) = (&rs, &est, &differ, &t);
+            let differ = &differ;
             sc.spawn(move || {
                 let mut ctx = TraceCtx::new(ti as u32, threads as u32, 0);
                 for _ in 0..2 {
@@ -275,17 +312,9 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
     });
     let of = (m * 2 * threads) as u64;
     let differ = differ.into_inner();
-    suite.push(Check::new(
+    Check::new(
         "concurrent-queries",
         differ == 0,
         format!("{threads} threads: {differ} of {of} estimates differ from one thread's"),
-    ));
-    drop(t);
-    drop((w, dark_world, mixed_world));
-
-    suite.at("unknown-key-refused");
-    let c = unknown_key(cx, 0);
-    suite.push(c);
-    crate::conform_panics::run(cx, suite, 0)?;
-    Ok(())
+    )
 }
