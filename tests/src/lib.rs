@@ -122,6 +122,8 @@ pub fn fixtures_dir() -> &'static Path {
             "rtk_panickycamera",
             "-p",
             "rtk_panickyintegrator",
+            "-p",
+            "rtk_keeper",
             "--manifest-path",
         ])
         .arg(&manifest)
@@ -427,4 +429,21 @@ pub fn build_plugin_crate(dir: &Path) -> PathBuf {
         .arg(&ftarget);
     run_cargo(c, &dir.display().to_string());
     ftarget.join("release")
+}
+
+/// A world built in this process from scene text (written to a temporary
+/// folder, so relative paths resolve there), with the built plugins.
+pub fn world_from(toml: &str) -> rtk_shell::World {
+    world_with_plugins(toml, &[bin_dir()])
+}
+
+/// [`world_from`] with these plugin folders (searched in order).
+pub fn world_with_plugins(toml: &str, dirs: &[&Path]) -> rtk_shell::World {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, toml).expect("scene");
+    let mut reg = rtk_shell::Registry::new(rtk_shell::PluginPath {
+        dirs: dirs.iter().map(|d| d.to_path_buf()).collect(),
+    });
+    rtk_shell::load(&path, &[], &mut reg, &rtk_shell::Sequential).unwrap_or_else(|e| panic!("{e}"))
 }

@@ -13,6 +13,7 @@
 
 mod camera;
 mod integrator;
+mod interior;
 mod light;
 mod object;
 mod panics;

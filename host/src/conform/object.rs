@@ -120,7 +120,7 @@ fn mesh_def(name: &str, file: &str) -> String {
 }
 
 /// An object definition of `class` with `params` over `children`.
-fn def(name: &str, class: &str, params: &Params, children: &[String]) -> String {
+pub(crate) fn def(name: &str, class: &str, params: &Params, children: &[String]) -> String {
     let mut s = format!("[objects.{name}]\nclass = \"{class}\"\n{}", params.lines());
     if !children.is_empty() {
         s += &format!("children = [{}]\n", children.join(", "));
@@ -129,7 +129,7 @@ fn def(name: &str, class: &str, params: &Params, children: &[String]) -> String 
 }
 
 /// A scene rooted at `class` (with `params`) over `children`.
-fn world(defs: &str, class: &str, params: &Params, children: &[String]) -> String {
+pub(crate) fn world(defs: &str, class: &str, params: &Params, children: &[String]) -> String {
     format!(
         "{}{defs}{}",
         header("world"),
@@ -603,6 +603,10 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<Shape> {
         }
         Shape::Primitive => primitive(cx, suite, scenes * nrays)?,
     }
+    suite.at("interior-parity");
+    let points = cx.n(2000, 20000);
+    let c = super::interior::check(cx, shape, points)?;
+    suite.push(c);
     suite.at("unknown-key-refused");
     let c = unknown_key(cx, shape.count());
     suite.push(c);
