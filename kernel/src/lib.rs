@@ -27,6 +27,7 @@
 //! only through their records, so any acceleration structure nests inside any
 //! other (the paper's meta-hierarchy).
 #![deny(missing_docs)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 
 pub use rtk_abi as abi;
 pub use rtk_abi::classes;

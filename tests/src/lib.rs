@@ -447,3 +447,23 @@ pub fn world_with_plugins(toml: &str, dirs: &[&Path]) -> rtk_shell::World {
     });
     rtk_shell::load(&path, &[], &mut reg, &rtk_shell::Sequential).unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// A file under `../shared` (beside the checkout: the data and anchors rtk
+/// may use but not copy). A test that needs it fails when it is absent —
+/// a pass must mean it ran — unless `RTK_NO_SHARED=1` is set, which skips
+/// the test and says so. (CI has `../shared` and never sets it.)
+pub fn shared(rel: &str) -> Option<PathBuf> {
+    let p = root().join("../shared").join(rel);
+    if p.exists() {
+        return Some(p);
+    }
+    if std::env::var("RTK_NO_SHARED").as_deref() == Ok("1") {
+        eprintln!("skipped (RTK_NO_SHARED=1): needs ../shared/{rel}");
+        return None;
+    }
+    panic!(
+        "this test needs ../shared/{rel} ({} is absent): put the shared data beside the \
+         checkout, or set RTK_NO_SHARED=1 to skip the tests that need it",
+        p.display()
+    );
+}

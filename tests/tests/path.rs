@@ -200,11 +200,9 @@ children = [
 /// independent and with stratified pixel positions.
 #[test]
 fn cornell_box_converges_to_mitsuba() {
-    let reference = root().join("../shared/anchors/mitsuba/ref_cornell.exr");
-    if !reference.exists() {
-        eprintln!("skipped: {} is absent", reference.display());
+    let Some(reference) = shared("anchors/mitsuba/ref_cornell.exr") else {
         return;
-    }
+    };
     for sampler in ["independent", "stratified"] {
         cornell_against(&reference, sampler);
     }

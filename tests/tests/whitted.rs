@@ -308,9 +308,8 @@ fn ply_ascii_binary_and_obj_read_the_same_mesh() {
     assert_eq!(a, b);
     assert!(a.data.iter().any(|&v| v > 0.0));
     // The shared binary PLY and OBJ of the bunny hold bit-identical floats.
-    let shared = root().join("../shared/data/meshes");
-    if shared.join("bunny.obj").exists() {
-        std::fs::copy(shared.join("bunny.obj"), dir.path().join("bunny.obj")).unwrap();
+    if let Some(obj) = shared("data/meshes/bunny.obj") {
+        std::fs::copy(obj, dir.path().join("bunny.obj")).unwrap();
         std::fs::copy(
             root().join("scenes/meshes/bunny.ply"),
             dir.path().join("bunny.ply"),

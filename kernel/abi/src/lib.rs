@@ -36,6 +36,7 @@
 //! appended by the issue that first calls it.
 
 #![deny(missing_docs)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![deny(clippy::missing_safety_doc)]
 
 pub mod classes;

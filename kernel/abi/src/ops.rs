@@ -450,7 +450,7 @@ impl Affine3x4 {
 
 impl BoundSphere {
     /// Bounds nothing: no ray meets it, and it is the identity of
-    /// [`BoundSphere::union`].
+    /// `SphereVolume::union` (rtk-geom).
     pub const EMPTY: BoundSphere = BoundSphere {
         center: Float3 {
             x: 0.0,

@@ -15,6 +15,7 @@
 //!   "in interior" for objects made of triangles).
 
 #![deny(missing_docs)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![deny(clippy::missing_safety_doc)]
 
 mod bvh;

@@ -9,6 +9,7 @@
 //! is accepted only when `t_min < t < t_max` and finite.
 
 #![deny(missing_docs)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![deny(clippy::missing_safety_doc)]
 
 mod offset;

@@ -160,9 +160,9 @@ impl ObjectBuilder {
 
     fn own(this: *mut c_void, class: ObjectModuleRef) -> Self {
         ObjectBuilder {
-            // SAFETY: `this` is the object `class` just made; the builder
-            // owns it alone until `prepare`, and destroys it on drop.
             inner: ObjectInner {
+                // SAFETY: `this` is the object `class` just made; the
+                // builder owns it alone until `prepare`, and destroys it on drop.
                 live: unsafe { LiveObject::new(this, class) },
             },
         }
@@ -459,7 +459,8 @@ impl Light {
         };
         let class = self.class_name();
         let Some(inner) = Arc::get_mut(&mut self.inner) else {
-            // The counts just taken are the plugin's to release; unowned, drop them here.
+            // The counts just taken were to be the plugin's; no call is made,
+            // so they are dropped here.
             // SAFETY: each count was taken above and is released once.
             unsafe {
                 (emitter.object.keep.release)(emitter.object.keep.owner);
@@ -476,7 +477,8 @@ impl Light {
         match inner.live.bind_emitter(emitter) {
             Some(r) => r,
             None => {
-                // SAFETY: as above: the entry is absent, so nobody took the counts.
+                // SAFETY: the light lacks the entry, so nobody took the two counts
+                // taken above; each is released once, here.
                 unsafe {
                     (emitter.object.keep.release)(emitter.object.keep.owner);
                     (emitter.shader_keep.release)(emitter.shader_keep.owner);

@@ -17,6 +17,7 @@
 //! never be destroyed before the parents that point at it.
 
 #![deny(missing_docs)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![deny(clippy::missing_safety_doc)]
 
 mod handles;

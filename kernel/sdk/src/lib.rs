@@ -38,6 +38,7 @@
 //!   expensive surface record only for the hit that is shaded.
 
 #![deny(missing_docs)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![deny(clippy::missing_safety_doc)]
 
 pub mod camera;
