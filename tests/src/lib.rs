@@ -170,11 +170,25 @@ pub fn abi_v2_dir() -> &'static Path {
     DIR.get_or_init(|| other_kernel_plugin("abiv2", Some("2.0.0"), &[]))
 }
 
-/// A plugin built against a kernel whose `rtk-abi` is 3.1.0 (a later minor:
-/// entries appended, nothing changed): it loads.
+/// A plugin built against a kernel whose `rtk-abi` is 3.1.0 (a later minor)
+/// and whose BVH differs (`rtk-accel` at 0.9.0, with another culling
+/// margin): it loads, since only the ABI crate's major version counts.
 pub fn later_minor_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| other_kernel_plugin("laterminor", Some("3.1.0"), &[]))
+    DIR.get_or_init(|| {
+        other_kernel_plugin(
+            "laterminor",
+            Some("3.1.0"),
+            &[
+                (
+                    "accel/Cargo.toml",
+                    "version.workspace = true",
+                    "version = \"0.9.0\"",
+                ),
+                ("accel/src/lib.rs", "1.0 / 16384.0", "1.0 / 8192.0"),
+            ],
+        )
+    })
 }
 
 /// Build the panicky fixture as class `class` against a copy of `kernel/`

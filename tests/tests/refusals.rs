@@ -64,7 +64,7 @@ fn a_plugin_built_against_abi_2_is_refused_with_both_versions_and_the_fix() {
 }
 
 #[test]
-fn a_plugin_built_against_a_later_minor_abi_loads() {
+fn a_plugin_built_against_a_later_minor_abi_and_another_bvh_loads() {
     let folder = plugin_folder(later_minor_dir(), &["laterminor"]);
     let (run, img) = render_scene(
         &scene("laterminor"),
