@@ -47,10 +47,10 @@ pub use rtk_geom::{SlabVolume, SphereVolume};
 pub use rtk_sdk::params::{self, parse_params};
 pub use rtk_sdk::{
     export_camera, export_integrator, export_light, export_object, export_shader, union_interior,
-    Area, BoundingVolumes, Camera, Child, Emitter, Env, Environment, FlattensPrimitives,
-    FromTransform, Integrator, Light, LiveObject, Material, Object, Plugin, PluginError, Prepare,
-    PrimSet, PrimitiveSet, SampleSurface, Scene, Shade, Shader, ShaderHandle, TriangleSlices,
-    Triangles,
+    AnalyticShape, Area, BoundingVolumes, Camera, Child, Emitter, Env, Environment,
+    FlattensPrimitives, FromTransform, Integrator, Light, LiveObject, Material, Object, Plugin,
+    PluginError, Prepare, PrimSet, PrimitiveSet, Root, SampleSurface, Scene, Shade, Shader,
+    ShaderHandle, TriangleSlices, Triangles,
 };
 pub use serde;
 

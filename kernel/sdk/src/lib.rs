@@ -16,10 +16,13 @@
 //!
 //! Each kind's trait has few required methods and defaults for the rest, so
 //! the smallest correct plugin is short (the `list` aggregate is about 60
-//! lines). Optional capabilities — [`PrimitiveSet`], [`FromTransform`],
-//! [`Shade`] — are traits the plugin implements *and names in its export
-//! macro*: the record's optional entries are filled from that list, so an
-//! entry is offered exactly when its methods exist.
+//! lines). A single analytic primitive implements [`AnalyticShape`] instead
+//! of [`Object`] — its root finder, its surface and its box — and the SDK's
+//! blanket impl makes it an object ([`analytic`]). Optional capabilities —
+//! [`PrimitiveSet`], [`FromTransform`], [`Shade`] — are traits the plugin
+//! implements *and names in its export macro*: the record's optional entries
+//! are filled from that list, so an entry is offered exactly when its
+//! methods exist.
 //!
 //! # Why the shape
 //! - **No `unsafe` in plugin crates, and no way to reach a raw record.** The
@@ -41,6 +44,7 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 #![deny(clippy::missing_safety_doc)]
 
+pub mod analytic;
 pub mod camera;
 mod child;
 mod conv;
@@ -75,6 +79,7 @@ use rtk_abi::*;
 use serde::de::DeserializeOwned;
 use std::path::PathBuf;
 
+pub use analytic::{AnalyticShape, Root};
 pub use child::{union_interior, Child, PrimSet};
 pub use conv::{FromRaw, ToRawAnswer};
 pub use emitter::{Emitter, ShaderHandle};

@@ -94,51 +94,26 @@ impl Plugin for ConeObject {
     }
 }
 
-impl ConeObject {
-    #[inline]
-    fn root(&self, ray: &Ray) -> Option<f32> {
-        self.cone.intersect(
-            ray.origin.to_array(),
-            ray.dir.to_array(),
-            ray.t_min,
-            ray.t_max,
-        )
-    }
-}
-
-impl Object for ConeObject {
+impl AnalyticShape for ConeObject {
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
         self.bounds
     }
 
-    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
-        ctx.stats.prim_tests += 1;
-        match self.root(ray) {
-            Some(t) => {
-                hit.record_leaf(level, t, 0, [0.0, 0.0]);
-                true
-            }
-            None => false,
-        }
+    fn nearest_root(&self, ray: &Ray) -> Option<Root> {
+        self.cone
+            .intersect(
+                ray.origin.to_array(),
+                ray.dir.to_array(),
+                ray.t_min,
+                ray.t_max,
+            )
+            .map(Root::at)
     }
 
-    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, _level: u32) -> bool {
-        ctx.stats.prim_tests += 1;
-        self.root(ray).is_some()
-    }
-
-    fn local_geom(
-        &self,
-        _ctx: &mut TraceCtx,
-        ray: &Ray,
-        hit: &Hit,
-        _level: u32,
-        mask: u32,
-        out: &mut LocalGeom,
-    ) {
+    fn surface(&self, ray: &Ray, root: Root, mask: u32, out: &mut LocalGeom) {
         let s = self
             .cone
-            .surface(ray.origin.to_array(), ray.dir.to_array(), hit.t);
+            .surface(ray.origin.to_array(), ray.dir.to_array(), root.t);
         let n = Vec3::from(s.n).normalize_or(Vec3::from(self.cone.frame[0]));
         out.p = Vec3::from(s.p).into();
         out.p_err = Vec3::from(s.p_err).into();

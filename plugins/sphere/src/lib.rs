@@ -24,19 +24,6 @@ struct Sphere {
     r: f32,
 }
 
-impl Sphere {
-    #[inline]
-    fn root(&self, ray: &Ray) -> Option<f32> {
-        let h = intersect_sphere_in_f64(
-            self.c.to_array(),
-            self.r,
-            ray.origin.to_array(),
-            ray.dir.to_array(),
-        )?;
-        nearest_root(&h, ray.t_min, ray.t_max)
-    }
-}
-
 impl Plugin for Sphere {
     type Params = Params;
 
@@ -64,10 +51,10 @@ impl Plugin for Sphere {
     }
 }
 
-impl Object for Sphere {
+impl AnalyticShape for Sphere {
     /// Inside when nearer the centre than the radius (f64: exact for every
     /// point farther from the surface than the rounding of its inputs).
-    fn in_interior(&self, _ctx: &mut TraceCtx, p: Vec3, _time: f32) -> Interior {
+    fn in_interior(&self, p: Vec3, _time: f32) -> Interior {
         let d2 = (p.as_dvec3() - self.c.as_dvec3()).length_squared();
         Interior::from_bool(d2 < (self.r as f64) * (self.r as f64))
     }
@@ -76,37 +63,23 @@ impl Object for Sphere {
         Bounds3::new(self.c - Vec3::splat(self.r), self.c + Vec3::splat(self.r))
     }
 
-    fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
-        ctx.stats.prim_tests += 1;
-        match self.root(ray) {
-            Some(t) => {
-                hit.record_leaf(level, t, 0, [0.0, 0.0]);
-                true
-            }
-            None => false,
-        }
+    fn nearest_root(&self, ray: &Ray) -> Option<Root> {
+        let h = intersect_sphere_in_f64(
+            self.c.to_array(),
+            self.r,
+            ray.origin.to_array(),
+            ray.dir.to_array(),
+        )?;
+        nearest_root(&h, ray.t_min, ray.t_max).map(Root::at)
     }
 
-    fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, _level: u32) -> bool {
-        ctx.stats.prim_tests += 1;
-        self.root(ray).is_some()
-    }
-
-    fn local_geom(
-        &self,
-        _ctx: &mut TraceCtx,
-        ray: &Ray,
-        hit: &Hit,
-        _level: u32,
-        mask: u32,
-        out: &mut LocalGeom,
-    ) {
+    fn surface(&self, ray: &Ray, root: Root, mask: u32, out: &mut LocalGeom) {
         let (p, err) = sphere_point_in_f64(
             self.c.to_array(),
             self.r,
             ray.origin.to_array(),
             ray.dir.to_array(),
-            hit.t,
+            root.t,
         );
         let p = Vec3::from(p);
         let n = ((p - self.c) / self.r).normalize_or(Vec3::Z);
