@@ -117,6 +117,34 @@ fn open_and_flat_classes_have_no_interior() {
     for p in [[0.0, 0.0, 0.0], [0.1, 0.5, 0.2], [10.0, 3.0, -2.0]] {
         assert_eq!(at(&w, p), Interior::NONE, "{p:?}");
     }
+    // Cylinders and cones are open unless `caps` closes them.
+    let w = world_from(&scene(
+        "[objects.c]\nclass = \"cylinder\"\n[objects.k]\nclass = \"cone\"\napex = [3.0, 1.0, 0.0]\naxis = [0.0, -1.0, 0.0]\n",
+        "\"c\", \"k\"",
+        "\"world\"",
+    ));
+    assert_eq!(at(&w, [0.0, 0.5, 0.0]), Interior::NONE);
+    assert_eq!(at(&w, [3.0, 0.2, 0.0]), Interior::NONE);
+}
+
+#[test]
+fn capped_cylinders_and_cones_answer_their_closed_forms() {
+    let w = world_from(&scene(
+        "[objects.c]\nclass = \"cylinder\"\nradius = 0.5\ncaps = true\n\
+         [objects.k]\nclass = \"cone\"\napex = [3.0, 1.0, 0.0]\naxis = [0.0, -1.0, 0.0]\nradius = 0.5\ncaps = true\n",
+        "\"c\", \"k\"",
+        "\"world\"",
+    ));
+    // The cylinder: y in (0, 1), within 0.5 of the y axis.
+    assert_eq!(at(&w, [0.0, 0.5, 0.0]), Interior::INSIDE);
+    assert_eq!(at(&w, [0.49, 0.01, 0.0]), Interior::INSIDE);
+    assert_eq!(at(&w, [0.0, 1.01, 0.0]), Interior::OUTSIDE);
+    assert_eq!(at(&w, [0.51, 0.5, 0.0]), Interior::OUTSIDE);
+    // The cone: apex at y = 1, base of radius 0.5 at y = 0.
+    assert_eq!(at(&w, [3.0, 0.5, 0.0]), Interior::INSIDE);
+    assert_eq!(at(&w, [3.24, 0.5, 0.0]), Interior::INSIDE);
+    assert_eq!(at(&w, [3.26, 0.5, 0.0]), Interior::OUTSIDE);
+    assert_eq!(at(&w, [3.0, -0.01, 0.0]), Interior::OUTSIDE);
 }
 
 /// A closed UV sphere as an OBJ file, and its exact (polyhedral) volume.
@@ -218,6 +246,20 @@ fn monte_carlo_volumes_of_the_closed_classes_match_their_exact_volumes() {
             [-1.4, -1.4, -1.4],
             [1.4, 1.4, 1.4],
             2.0 * PI * PI * 1.0 * 0.3 * 0.3,
+        ),
+        (
+            "cylinder with caps",
+            "[objects.x]\nclass = \"cylinder\"\nbase = [0.1, -0.5, 0.2]\naxis = [0.3, 1.0, -0.2]\nheight = 1.5\nradius = 0.6\ncaps = true\n".into(),
+            [-1.0, -1.2, -1.0],
+            [1.2, 1.5, 1.3],
+            PI * 0.36 * 1.5,
+        ),
+        (
+            "cone with caps",
+            "[objects.x]\nclass = \"cone\"\napex = [0.0, 1.0, 0.0]\naxis = [0.0, -1.0, 0.4]\nheight = 1.6\nradius = 0.8\ncaps = true\n".into(),
+            [-1.0, -1.0, -0.5],
+            [1.0, 1.2, 1.6],
+            PI * 0.64 * 1.6 / 3.0,
         ),
         (
             "mesh (a closed UV sphere)",

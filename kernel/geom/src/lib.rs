@@ -12,6 +12,7 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 #![deny(clippy::missing_safety_doc)]
 
+mod disk;
 mod offset;
 mod placed;
 mod real;
@@ -21,6 +22,7 @@ mod triangle;
 pub mod vec;
 mod volume;
 
+pub use disk::{Disk, DiskSurface};
 pub use offset::{offset_ray_origin, spawn_ray, spawn_ray_between, spawn_ray_to, SHADOW_EPSILON};
 pub use placed::{abs_mat3, placed_point_error};
 pub use real::{gamma, max_of, min_of, Real};

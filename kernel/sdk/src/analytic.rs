@@ -54,6 +54,7 @@
 use crate::{Object, Plugin};
 use glam::Vec3;
 use rtk_abi::*;
+use rtk_geom::Disk;
 
 /// A root of a ray against an analytic shape: the ray parameter and the
 /// primitive's two words of its own, kept in the hit record (`hit.uv`)
@@ -154,5 +155,54 @@ impl<T: AnalyticShape> Object for T {
     #[inline]
     fn in_interior(&self, _ctx: &mut TraceCtx, p: Vec3, time: f32) -> Interior {
         AnalyticShape::in_interior(self, p, time)
+    }
+}
+
+// ---- Closing a surface with disks (closed cylinders and cones)
+
+/// The nearest of a surface's own root and the disks closing it (caps:
+/// part `k + 1` for `caps[k]`, in `uv[0]`; a cap wins only when strictly
+/// nearer, so a tie at the rim goes to the surface, part 0). How a closed
+/// cylinder or cone finds its hits.
+pub fn nearest_with_caps(caps: &[Disk<f32>], wall: Option<Root>, ray: &Ray) -> Option<Root> {
+    let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+    let mut best = wall;
+    for (k, cap) in caps.iter().enumerate() {
+        let limit = best.map_or(ray.t_max, |b| b.t);
+        if let Some(t) = cap.intersect(o, d, ray.t_min, limit) {
+            best = Some(Root {
+                t,
+                uv: [(k + 1) as f32, 0.0],
+            });
+        }
+    }
+    best
+}
+
+/// The surface at a cap hit: the point in the cap's plane with its error
+/// bound, the cap's normal, uv = (angle / 2π, distance from the centre /
+/// radius).
+pub fn cap_surface(cap: &Disk<f32>, ray: &Ray, t: f32, mask: u32, out: &mut LocalGeom) {
+    let s = cap.surface(ray.origin.to_array(), ray.dir.to_array(), t);
+    let n = Vec3::from(cap.n());
+    out.p = Vec3::from(s.p).into();
+    out.p_err = Vec3::from(s.p_err).into();
+    out.ng = n.into();
+    out.ns = n.into();
+    out.filled |= geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL;
+    if mask & (geom_mask::UV | geom_mask::TANGENTS) != 0 {
+        let [x, y] = s.xy;
+        let rho = (x * x + y * y).sqrt();
+        let phi = y.atan2(x).rem_euclid(std::f32::consts::TAU);
+        out.uv = [phi / std::f32::consts::TAU, (rho / cap.r).clamp(0.0, 1.0)];
+        let [fu, fv, _] = cap.frame.map(Vec3::from);
+        let radial = if rho > 0.0 {
+            (fu * x + fv * y) / rho
+        } else {
+            fu
+        };
+        out.dpdu = ((fv * x - fu * y) * std::f32::consts::TAU).into();
+        out.dpdv = (radial * cap.r).into();
+        out.filled |= geom_mask::UV | geom_mask::TANGENTS;
     }
 }

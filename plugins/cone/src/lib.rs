@@ -4,7 +4,9 @@
 mod shape;
 use rtk_kernel::geom::vec;
 
+use rtk_kernel::geom::Disk;
 use rtk_kernel::glam::Vec3;
+use rtk_kernel::sdk::analytic::{cap_surface, nearest_with_caps};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use shape::Cone;
@@ -21,6 +23,8 @@ struct Params {
     height: Option<f32>,
     #[serde(default = "one")]
     radius: f32,
+    #[serde(default)]
+    caps: bool,
 }
 
 fn one() -> f32 {
@@ -40,6 +44,9 @@ struct ConeObject {
     sphere: BoundSphere,
     cone: Cone<f32>,
     bounds: Bounds3,
+    /// The base disk when `caps` closes the cone (part 1 of a hit; the
+    /// wall is part 0), outward.
+    caps: Option<[Disk<f32>; 1]>,
 }
 
 /// A length: finite, positive, within what f32 handles.
@@ -86,10 +93,13 @@ impl Plugin for ConeObject {
         // axis's midpoint (when r >= h/2 the rim is farther; else the apex).
         let mid: [f64; 3] = std::array::from_fn(|i| a64[i] + 0.5 * axis[i]);
         let reach = ((r as f64).powi(2) + (0.5 * h).powi(2)).sqrt();
+        let w = vec::frame64(axis)[2];
+        let caps = p.caps.then(|| [Disk::new(base, w, r as f64, 0.0)]);
         Ok(ConeObject {
             sphere: BoundSphere::from_f64(mid, reach, 1e-6 * reach),
             cone: Cone::new(a64, axis, r as f64),
             bounds: Bounds3::new(Vec3::from(lo), Vec3::from(hi)),
+            caps,
         })
     }
 }
@@ -100,17 +110,37 @@ impl AnalyticShape for ConeObject {
     }
 
     fn nearest_root(&self, ray: &Ray) -> Option<Root> {
-        self.cone
-            .intersect(
-                ray.origin.to_array(),
-                ray.dir.to_array(),
-                ray.t_min,
-                ray.t_max,
-            )
-            .map(Root::at)
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let wall = self
+            .cone
+            .intersect(o, d, ray.t_min, ray.t_max)
+            .map(Root::at);
+        match &self.caps {
+            Some(caps) => nearest_with_caps(caps, wall, ray),
+            None => wall,
+        }
+    }
+
+    /// Inside a closed cone: between the apex and the base's plane, nearer
+    /// the axis than the cone's radius there, in f64. An open one has no
+    /// interior.
+    fn in_interior(&self, p: Vec3, _time: f32) -> Interior {
+        if self.caps.is_none() {
+            return Interior::NONE;
+        }
+        let a = Vec3::from(self.cone.apex).as_dvec3();
+        let w = Vec3::from(self.cone.frame[2]).as_dvec3();
+        let f = p.as_dvec3() - a;
+        let z = f.dot(w);
+        let rho2 = f.length_squared() - z * z;
+        let (h, k) = (self.cone.h as f64, self.cone.k as f64);
+        Interior::from_bool(z > 0.0 && z < h && rho2 < (k * z) * (k * z))
     }
 
     fn surface(&self, ray: &Ray, root: Root, mask: u32, out: &mut LocalGeom) {
+        if let (Some(caps), 1) = (&self.caps, root.uv[0] as usize) {
+            return cap_surface(&caps[0], ray, root.t, mask, out);
+        }
         let s = self
             .cone
             .surface(ray.origin.to_array(), ray.dir.to_array(), root.t);

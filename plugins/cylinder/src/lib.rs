@@ -4,7 +4,9 @@
 mod shape;
 use rtk_kernel::geom::vec;
 
+use rtk_kernel::geom::Disk;
 use rtk_kernel::glam::Vec3;
+use rtk_kernel::sdk::analytic::{cap_surface, nearest_with_caps};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use shape::Cylinder;
@@ -21,6 +23,8 @@ struct Params {
     height: Option<f32>,
     #[serde(default = "one")]
     radius: f32,
+    #[serde(default)]
+    caps: bool,
 }
 
 fn one() -> f32 {
@@ -36,6 +40,9 @@ struct CylinderObject {
     sphere: BoundSphere,
     cyl: Cylinder<f32>,
     bounds: Bounds3,
+    /// The bottom and top disks when `caps` closes the cylinder (parts 1
+    /// and 2 of a hit; the wall is part 0), outward.
+    caps: Option<[Disk<f32>; 2]>,
 }
 
 /// A length: finite, positive, within what f32 handles.
@@ -81,10 +88,18 @@ impl Plugin for CylinderObject {
         let mid: [f64; 3] = std::array::from_fn(|i| b64[i] + 0.5 * axis[i]);
         let reach = ((r as f64).powi(2) + (0.5 * h).powi(2)).sqrt();
         let sphere = BoundSphere::from_f64(mid, reach, 1e-6 * reach);
+        let w = vec::frame64(axis)[2];
+        let caps = p.caps.then(|| {
+            [
+                Disk::new(b64, w.map(|c| -c), r as f64, 0.0),
+                Disk::new(top, w, r as f64, 0.0),
+            ]
+        });
         Ok(CylinderObject {
             sphere,
             cyl: Cylinder::new(b64, axis, r as f64),
             bounds: Bounds3::new(Vec3::from(lo), Vec3::from(hi)),
+            caps,
         })
     }
 }
@@ -95,17 +110,33 @@ impl AnalyticShape for CylinderObject {
     }
 
     fn nearest_root(&self, ray: &Ray) -> Option<Root> {
-        self.cyl
-            .intersect(
-                ray.origin.to_array(),
-                ray.dir.to_array(),
-                ray.t_min,
-                ray.t_max,
-            )
-            .map(Root::at)
+        let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+        let wall = self.cyl.intersect(o, d, ray.t_min, ray.t_max).map(Root::at);
+        match &self.caps {
+            Some(caps) => nearest_with_caps(caps, wall, ray),
+            None => wall,
+        }
+    }
+
+    /// Inside a closed cylinder: between the caps' planes and nearer the
+    /// axis than the radius, in f64. An open one has no interior.
+    fn in_interior(&self, p: Vec3, _time: f32) -> Interior {
+        if self.caps.is_none() {
+            return Interior::NONE;
+        }
+        let b = Vec3::from(self.cyl.base).as_dvec3();
+        let w = Vec3::from(self.cyl.frame[2]).as_dvec3();
+        let f = p.as_dvec3() - b;
+        let z = f.dot(w);
+        let rho2 = f.length_squared() - z * z;
+        let (h, r) = (self.cyl.h as f64, self.cyl.r as f64);
+        Interior::from_bool(z > 0.0 && z < h && rho2 < r * r)
     }
 
     fn surface(&self, ray: &Ray, root: Root, mask: u32, out: &mut LocalGeom) {
+        if let (Some(caps), part @ 1..=2) = (&self.caps, root.uv[0] as usize) {
+            return cap_surface(&caps[part - 1], ray, root.t, mask, out);
+        }
         let s = self
             .cyl
             .surface(ray.origin.to_array(), ray.dir.to_array(), root.t);

@@ -1,13 +1,12 @@
 #![doc = include_str!("../README.md")]
 #![forbid(unsafe_code)]
 
-mod shape;
 use rtk_kernel::geom::vec;
 
+use rtk_kernel::geom::Disk;
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
-use shape::Disk;
 use std::f32::consts::TAU;
 
 #[derive(Deserialize)]

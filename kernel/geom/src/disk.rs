@@ -1,8 +1,9 @@
-//! The disk's geometric core, generic over [`Real`]: the plugin runs it in
-//! f32, the tests run the same code in f64 as the reference.
+//! A disk or an annulus in a plane, generic over [`Real`]: the `disk`
+//! plugin and the caps of closed cylinders and cones run it in f32, the
+//! tests run the same code in f64 as the reference.
 
-use rtk_kernel::geom::vec::*;
-use rtk_kernel::geom::{gamma, Real};
+use crate::vec::*;
+use crate::{gamma, Real};
 
 /// A disk (or an annulus) of centre `c` in the plane through `c` normal to `n`.
 #[derive(Clone, Copy, Debug)]
@@ -19,7 +20,7 @@ pub struct Disk<R> {
 
 /// A hit point on the surface and what `local_geom` needs of it.
 #[derive(Clone, Copy, Debug)]
-pub struct Surface<R> {
+pub struct DiskSurface<R> {
     /// The point, reprojected onto the plane.
     pub p: V<R>,
     /// Per-component bound on its distance from the exact plane.
@@ -100,7 +101,7 @@ impl<R: Real> Disk<R> {
     /// The hit point at `t`, reprojected onto the plane, and its error bound:
     /// γ₈|q| for the projection (q = p − c) plus γ₂|pᵢ| for adding the centre.
     #[inline]
-    pub fn surface(&self, o: V<R>, d: V<R>, t: R) -> Surface<R> {
+    pub fn surface(&self, o: V<R>, d: V<R>, t: R) -> DiskSurface<R> {
         let n = self.n();
         let w = sub(self.c, o);
         let q = sub(scale(d, t), w);
@@ -111,7 +112,7 @@ impl<R: Real> Disk<R> {
         let g8 = gamma::<R>(8);
         let g2 = gamma::<R>(2);
         let p_err = std::array::from_fn(|i| g8 * ql + g2 * p[i].abs());
-        Surface {
+        DiskSurface {
             p,
             p_err,
             xy: [dot(qp, self.frame[0]), dot(qp, self.frame[1])],
@@ -122,9 +123,9 @@ impl<R: Real> Disk<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rtk_kernel::geom::offset_ray_origin;
-    use rtk_kernel::glam::Vec3;
-    use rtk_kernel::RngState;
+    use crate::offset_ray_origin;
+    use glam::Vec3;
+    use rtk_abi::RngState;
 
     fn pair(c: [f32; 3], n: [f32; 3], r: f32, ri: f32) -> (Disk<f32>, Disk<f64>) {
         let c = c.map(f64::from);
