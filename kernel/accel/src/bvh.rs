@@ -293,8 +293,10 @@ impl<const W: usize> Bvh<W> {
     /// The top levels have few nodes, each over many primitives: their
     /// passes over the primitives (boxes, bins) are split into pieces
     /// across `par`, their partitions stay serial. Below them, whole
-    /// subtrees are independent tasks. The dragon builds in about 140 ms on
-    /// two threads against about 190 ms on one (BENCHMARKS.md).
+    /// subtrees are independent tasks. Why both: the top levels hold every
+    /// primitive but few nodes, so as tasks they would keep one thread busy
+    /// while the others wait for their subtrees (build times on one and two
+    /// threads: BENCHMARKS.md, issue 7, "The build runs on the host's pool").
     pub fn build_on(boxes: &[Bounds3], params: BuildParams, par: &Parallel<'_>) -> Self {
         assert!(W == 4 || W == 8, "a BVH is 4 or 8 wide");
         let centroids: Vec<Vec3> = boxes
@@ -581,9 +583,10 @@ impl<const W: usize> Bvh<W> {
 
     /// [`traverse`](Self::traverse) for any-hit queries, which stop at the
     /// first hit and never narrow `t_max`: the 8-wide walk skips the
-    /// ranking, which costs more than it saves there (front-to-back order
-    /// visits 2 % fewer nodes of the dragon's occlusion rays, and runs 8 %
-    /// slower, BENCHMARKS.md); the other walks rank as for `traverse`.
+    /// ranking, which costs more than it saves there (an occlusion ray ends
+    /// at any hit, so the order spares few node visits; BENCHMARKS.md,
+    /// issue 7, "Tried and reverted"); the other walks rank as for
+    /// `traverse`.
     #[inline]
     pub fn traverse_any(&self, ray: &Ray, t_max: f32, node_tests: &mut u64, leaf: impl Visit) {
         #[cfg(target_arch = "x86_64")]
@@ -1111,8 +1114,9 @@ pub trait Visit {
 /// 2 MiB pages (Linux's transparent huge pages, `madvise` mode). Why: an
 /// incoherent ray touches a few lines of each of a dozen 4 KiB pages of a
 /// layout of tens of MiB, and a TLB miss under a hypervisor's nested paging
-/// costs a walk of up to 24 memory references; measured +9 % on the
-/// dragon's incoherent rays and +13 % on its occlusion rays (BENCHMARKS.md).
+/// costs a walk of up to 24 memory references: the rays that jump across
+/// the layout, incoherent and occlusion rays, gain most (BENCHMARKS.md,
+/// issue 7).
 ///
 /// A layout of 2 MiB or more gets pages of its own (`mmap`), starting on a
 /// 2 MiB boundary, so every page of it can be a huge one. A heap copy
