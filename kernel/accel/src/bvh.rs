@@ -591,7 +591,8 @@ impl<const W: usize> Bvh<W> {
     pub fn traverse_any(&self, ray: &Ray, t_max: f32, node_tests: &mut u64, leaf: impl Visit) {
         #[cfg(target_arch = "x86_64")]
         if self.simd != Simd::Portable {
-            // SAFETY: as in `traverse`.
+            // SAFETY: `simd` names a walk only when the CPU has its
+            // features (`set_simd`), and W = 8.
             return unsafe { self.walk8_on::<false>(ray, t_max, node_tests, leaf) };
         }
         let screen = |_, t, _| Some(t);
@@ -976,7 +977,8 @@ impl<const W: usize> Bvh<W> {
     fn node_at(&self, i: u32) -> &Node<W> {
         let node_lines = std::mem::size_of::<Node<W>>() / 64;
         debug_assert!(i as usize + node_lines <= self.lines.len);
-        // SAFETY: as above, lines `i..i + node_lines` hold a node written by
+        // SAFETY: `i` is a node's line offset (the walk follows only those
+        // `interleave` wrote), so lines `i..i + node_lines` hold a node written by
         // `write_node` (every field a plain number, so any bytes are valid),
         // 64-byte aligned as `Node` is; the layout is immutable once made.
         unsafe { &*(self.lines.ptr.as_ptr().add(i as usize) as *const Node<W>) }
@@ -988,7 +990,8 @@ impl<const W: usize> Bvh<W> {
     #[inline(always)]
     fn node(&self, i: u32) -> &Node<W> {
         debug_assert!((i as usize) < self.nodes.len());
-        // SAFETY: as above; the tree is immutable after the build.
+        // SAFETY: `i` is below `nodes.len()`: the walk follows only the
+        // indices `collapse` wrote, and the tree is immutable after the build.
         unsafe { self.nodes.get_unchecked(i as usize) }
     }
 }
@@ -1308,7 +1311,8 @@ enum LinesOwner {
 // shared slices of plain bytes, and a mutable one only through `&mut self`
 // (`as_mut_slice`, while `interleave` fills it).
 unsafe impl Send for HugeLines {}
-// SAFETY: as above: shared access is read-only.
+// SAFETY: `&HugeLines` only reads (`as_slice`, the raw pointer the walks
+// load through); writing needs `&mut self`.
 unsafe impl Sync for HugeLines {}
 
 impl HugeLines {
