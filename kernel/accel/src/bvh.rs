@@ -20,8 +20,9 @@
 //!   Embree's builders fill a wide node, a child the SAH would make a leaf
 //!   of more than one block is opened too while the node has free slots;
 //!   only the children left when it is full become leaves. On the dragon
-//!   this gives Embree's tree: 12,717 nodes against its 13,754, SAH cost
-//!   15.07 against its 15.08 ([`Bvh::sah`]).
+//!   this gives a tree of Embree's shape: node count and SAH cost
+//!   ([`Bvh::sah`]) close to its own (BENCHMARKS.md, issue 7, "Fourth
+//!   session: Embree's own tree").
 //!
 //! What is rtk's own: the robustness (`docs/numerics.md` rule 10: the far
 //! distance widened by `1 + 2γ₄` — Ize 2013's `1 + 2γ₃`, plus the
