@@ -301,7 +301,7 @@ fn environment_checks(
     suite.push(Check::skip("points-on-light", why));
 }
 
-/// `pdf-integrates`: ∫ pdf_li dω by uniform directions, 4π·E[pdf], is 1
+/// `pdf-integrates`: ∫ pdf_li dω by uniform directions, 4π·E\[pdf\], is 1
 /// from each of a few random points.
 fn pdf_integrates(cx: &mut Cx, light: &Light, ctx: &mut TraceCtx) -> Check {
     let m = cx.n(20000, 200000);

@@ -219,7 +219,7 @@ impl Probe<'_> {
         }
     }
 
-    /// ∫ pdf dω by uniform directions (4π·E[pdf]) against the share of
+    /// ∫ pdf dω by uniform directions (4π·E\[pdf\]) against the share of
     /// non-delta samples, which is the mass the density covers.
     fn pdf_integral(&mut self, wo: Vec3, nonzero_share: f64, t: &mut Tallies) {
         let m = 4 * self.n;
