@@ -16,7 +16,8 @@
 //!   and f64 so the f64 reference and the stress tests share one
 //!   implementation.
 //! - [`accel`] (`rtk-accel`): what aggregates share: children flattened into
-//!   primitives with the list's exact answer, the BVH, mailboxes. It belongs
+//!   primitives with the list's exact answer, the BVH, mailboxes, the cell
+//!   walk of grids, octrees and kd-trees. It belongs
 //!   to the aggregates that use it, not to the interface: changing it is not
 //!   an ABI event.
 //!

@@ -449,8 +449,9 @@ impl Affine3x4 {
 }
 
 impl BoundSphere {
-    /// Bounds nothing: no ray meets it, and it is the identity of
-    /// `SphereVolume::union` (rtk-geom).
+    /// Bounds nothing: no ray meets it, and it is the identity of the
+    /// spheres' union (`rtk_geom::SphereVolume::union`, which this crate
+    /// cannot link to).
     pub const EMPTY: BoundSphere = BoundSphere {
         center: Float3 {
             x: 0.0,

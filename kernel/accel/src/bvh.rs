@@ -20,8 +20,9 @@
 //!   Embree's builders fill a wide node, a child the SAH would make a leaf
 //!   of more than one block is opened too while the node has free slots;
 //!   only the children left when it is full become leaves. On the dragon
-//!   this gives Embree's tree: 12,717 nodes against its 13,754, SAH cost
-//!   15.07 against its 15.08 ([`Bvh::sah`]).
+//!   this gives a tree of Embree's shape: node count and SAH cost
+//!   ([`Bvh::sah`]) close to its own (BENCHMARKS.md, issue 7, "Fourth
+//!   session: Embree's own tree").
 //!
 //! What is rtk's own: the robustness (`docs/numerics.md` rule 10: the far
 //! distance widened by `1 + 2γ₄` — Ize 2013's `1 + 2γ₃`, plus the
@@ -293,8 +294,10 @@ impl<const W: usize> Bvh<W> {
     /// The top levels have few nodes, each over many primitives: their
     /// passes over the primitives (boxes, bins) are split into pieces
     /// across `par`, their partitions stay serial. Below them, whole
-    /// subtrees are independent tasks. The dragon builds in about 140 ms on
-    /// two threads against about 190 ms on one (BENCHMARKS.md).
+    /// subtrees are independent tasks. Why both: the top levels hold every
+    /// primitive but few nodes, so as tasks they would keep one thread busy
+    /// while the others wait for their subtrees (build times on one and two
+    /// threads: BENCHMARKS.md, issue 7, "The build runs on the host's pool").
     pub fn build_on(boxes: &[Bounds3], params: BuildParams, par: &Parallel<'_>) -> Self {
         assert!(W == 4 || W == 8, "a BVH is 4 or 8 wide");
         let centroids: Vec<Vec3> = boxes
@@ -581,14 +584,16 @@ impl<const W: usize> Bvh<W> {
 
     /// [`traverse`](Self::traverse) for any-hit queries, which stop at the
     /// first hit and never narrow `t_max`: the 8-wide walk skips the
-    /// ranking, which costs more than it saves there (front-to-back order
-    /// visits 2 % fewer nodes of the dragon's occlusion rays, and runs 8 %
-    /// slower, BENCHMARKS.md); the other walks rank as for `traverse`.
+    /// ranking, which costs more than it saves there (an occlusion ray ends
+    /// at any hit, so the order spares few node visits; BENCHMARKS.md,
+    /// issue 7, "Tried and reverted"); the other walks rank as for
+    /// `traverse`.
     #[inline]
     pub fn traverse_any(&self, ray: &Ray, t_max: f32, node_tests: &mut u64, leaf: impl Visit) {
         #[cfg(target_arch = "x86_64")]
         if self.simd != Simd::Portable {
-            // SAFETY: as in `traverse`.
+            // SAFETY: `simd` names a walk only when the CPU has its
+            // features (`set_simd`), and W = 8.
             return unsafe { self.walk8_on::<false>(ray, t_max, node_tests, leaf) };
         }
         let screen = |_, t, _| Some(t);
@@ -717,22 +722,27 @@ impl<const W: usize> Bvh<W> {
 
     /// The 8-wide walk, all in vector registers: each node is six aligned
     /// row loads (the near and far rows chosen once per ray), a subtract
-    /// and a multiply per row, a compare and a mask. The children entered
-    /// are put in the octant's front-to-back order (`Node::perm`) and
-    /// pushed in one pair of 8-wide stores, so no branch depends on their
-    /// distances; the nearest comes straight back off the stack (any-hit
-    /// queries, `!ORDERED`, skip the ranking). How the entered children
-    /// are packed together differs by `X512`:
+    /// and a multiply per row, a compare and a mask ([`Ray8::test`]). The
+    /// children entered are put in the octant's front-to-back order
+    /// (`Node::perm`) and pushed in one pair of 8-wide stores, so no branch
+    /// depends on their distances; the nearest comes straight back off the
+    /// stack (any-hit queries, `!ORDERED`, skip the ranking). How the
+    /// entered children are packed together differs by `X512`:
     /// - AVX2: the ranked children and distances are each permuted by an
-    ///   entry of a lookup table (`COMPRESS`, 8 KiB) indexed by the mask;
+    ///   entry of a lookup table (`COMPRESS`, 8 KiB) indexed by the mask
+    ///   ([`push_by_table`]);
     /// - AVX-512: the rank itself is compressed (`VPCOMPRESSD` into a
     ///   register; never into memory, microcoded on Zen 4) and children and
     ///   distances are permuted by it: no table, and on nearest-hit queries
     ///   one permutation fewer (any-hit queries permute the mask instead of
-    ///   loading a table entry: as many operations).
+    ///   loading a table entry: as many operations; [`push_by_compress`]).
     ///
     /// `LINES`: the tree is interleaved ([`Bvh::interleave`]); nodes and
     /// leaves are line offsets into it.
+    ///
+    /// Every step is an `#[inline(always)]` function without features of
+    /// its own, so it is compiled into `walk8_avx2` or `walk8_avx512` with
+    /// theirs: the loop makes no call but the leaf's.
     ///
     /// # Safety
     /// The CPU must have AVX2, and AVX-512 F, VL and DQ if `X512`; the
@@ -747,33 +757,24 @@ impl<const W: usize> Bvh<W> {
         node_tests: &mut u64,
         mut leaf: impl Visit,
     ) {
-        use std::arch::x86_64::*;
         debug_assert!(W == 8);
         if self.no_nodes(&mut leaf) {
             return;
         }
-        let pre = Precomp::new(ray);
-        // Byte offsets of each axis's near and far row within a node.
-        let row = |upper: bool, a: usize| (if upper { 3 + a } else { a }) * W;
-        let near = [0, 1, 2].map(|a| row(pre.neg[a], a));
-        let far = [0, 1, 2].map(|a| row(!pre.neg[a], a));
-        let octant = pre.neg[0] as u32 | (pre.neg[1] as u32) << 1 | (pre.neg[2] as u32) << 2;
-        let shift = _mm_cvtsi32_si128(3 * octant as i32);
         let mut ids = std::mem::MaybeUninit::<[u32; STACK8]>::uninit();
         let mut dists = std::mem::MaybeUninit::<[f32; STACK8]>::uninit();
         let (ids, dists) = (ids.as_mut_ptr() as *mut u32, dists.as_mut_ptr() as *mut f32);
         let mut sp = 0usize;
         let mut t_max = t_max;
-        // SAFETY: register arithmetic, and loads of whole rows of a node
-        // (32 bytes at a 32-byte offset of a 64-byte aligned node) or of the
-        // stack's written entries; every stack store is within `STACK8`.
+        // SAFETY: the CPU has AVX2 (and AVX-512 F, VL, DQ if `X512`), per
+        // the contract, which is all `Ray8` and the push functions need
+        // besides their pointers: a node's rows are read from a node the
+        // tree holds (`node`, `node_at`); the stack is written at
+        // `sp..sp + 8` only after `sp + 8 <= STACK8` is asserted, and read
+        // below `sp`, where entries were written; a leaf's lines start at an
+        // offset `interleave` wrote into its slot.
         unsafe {
-            // (o − b)·(−1/d) is (b − o)·(1/d) bit for bit (negation is
-            // exact), and lets each row load fold into the subtraction.
-            let o = pre.o.map(|x| _mm256_set1_ps(x));
-            let inv = pre.inv.map(|x| _mm256_set1_ps(-x));
-            let inv_far = pre.inv.map(|x| _mm256_set1_ps(-(x * FAR_SCALE)));
-            let t_lo = _mm256_set1_ps(ray.t_min);
+            let r = Ray8::new::<W>(&Precomp::new(ray), ray.t_min);
             let mut cur = 0u32;
             loop {
                 if cur & LEAF == 0 {
@@ -783,102 +784,23 @@ impl<const W: usize> Bvh<W> {
                         self.node(cur)
                     };
                     *node_tests += 1;
-                    let base = node as *const Node<W> as *const f32;
-                    let mut t0 = t_lo;
-                    let mut t1 = _mm256_set1_ps(t_max);
-                    for a in 0..3 {
-                        let n = _mm256_load_ps(base.add(near[a]));
-                        let f = _mm256_load_ps(base.add(far[a]));
-                        // MAXPS/MINPS return the second operand when either is
-                        // NaN (0·∞): the running bound stays in place.
-                        t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(o[a], n), inv[a]), t0);
-                        t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(o[a], f), inv_far[a]), t1);
-                    }
-                    let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1);
-                    let mask = if X512 {
-                        _mm256_movepi32_mask(_mm256_castps_si256(hit)) as u32
-                    } else {
-                        _mm256_movemask_ps(hit) as u32
-                    };
+                    let (hit, t0) = r.test(node, t_max);
+                    let mask = lane_mask::<X512>(hit);
                     if mask != 0 {
-                        let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
                         if mask & (mask - 1) == 0 {
                             cur = node.child[mask.trailing_zeros() as usize];
                             continue;
                         }
                         assert!(sp + 8 <= STACK8, "BVH traversal stack overflow");
+                        let top = (ids.add(sp), dists.add(sp));
                         if X512 {
-                            // The slots to push, farthest first (the
-                            // stack's order, as `COMPRESS` makes it).
-                            let backwards = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
-                            let rank = if ORDERED {
-                                let perm = _mm256_load_si256(node.perm.as_ptr() as *const __m256i);
-                                // VPERMD reads the low three bits of each
-                                // index: the octant's, after the shift.
-                                _mm256_permutevar8x32_epi32(
-                                    _mm256_srl_epi32(perm, shift),
-                                    backwards,
-                                )
-                            } else {
-                                backwards
-                            };
-                            let ranked =
-                                _mm256_permutevar8x32_epi32(_mm256_castps_si256(hit), rank);
-                            let pick =
-                                _mm256_maskz_compress_epi32(_mm256_movepi32_mask(ranked), rank);
-                            _mm256_storeu_si256(
-                                ids.add(sp) as *mut __m256i,
-                                _mm256_permutevar8x32_epi32(child, pick),
-                            );
-                            if ORDERED {
-                                _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t0, pick));
-                            }
+                            push_by_compress::<ORDERED, W>(node, hit, t0, r.shift, top);
                         } else {
-                            let (mut m, mut t, mut c) = (mask, t0, child);
-                            if ORDERED {
-                                let perm = _mm256_load_si256(node.perm.as_ptr() as *const __m256i);
-                                // VPERMPS reads the low three bits of each index.
-                                let rank = _mm256_srl_epi32(perm, shift);
-                                m = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, rank)) as u32;
-                                t = _mm256_permutevar8x32_ps(t0, rank);
-                                c = _mm256_permutevar8x32_epi32(child, rank);
-                            }
-                            let pick =
-                                _mm256_load_si256(COMPRESS[m as usize].as_ptr() as *const __m256i);
-                            _mm256_storeu_si256(
-                                ids.add(sp) as *mut __m256i,
-                                _mm256_permutevar8x32_epi32(c, pick),
-                            );
-                            if ORDERED {
-                                // An any-hit query's t_max never narrows: every
-                                // deferred child stays in range, no distance kept.
-                                _mm256_storeu_ps(dists.add(sp), _mm256_permutevar8x32_ps(t, pick));
-                            }
+                            push_by_table::<ORDERED, W>(node, hit, t0, mask, r.shift, top);
                         }
                         // Farthest first: the nearest is on top, taken now.
                         let deferred = mask.count_ones() as usize - 1;
-                        // The others wait until the nearest's subtree is
-                        // done: fetch them meanwhile (an incoherent ray
-                        // spends most of its time waiting on memory).
-                        for i in sp..sp + deferred {
-                            let c = *ids.add(i);
-                            if LINES {
-                                // A node's first four lines, or a leaf's
-                                // first block (three) and what follows.
-                                let p =
-                                    self.lines.ptr.as_ptr().add((c & !LEAF) as usize) as *const i8;
-                                for line in 0..4 {
-                                    _mm_prefetch::<_MM_HINT_T0>(p.add(64 * line));
-                                }
-                            } else if c & LEAF != 0 {
-                                leaf.prefetch((c & !LEAF) as usize);
-                            } else {
-                                let p = self.node(c) as *const Node<W> as *const i8;
-                                for line in 0..std::mem::size_of::<Node<W>>() / 64 {
-                                    _mm_prefetch::<_MM_HINT_T0>(p.add(64 * line));
-                                }
-                            }
-                        }
+                        self.prefetch_deferred::<LINES>(ids, sp..sp + deferred, &leaf);
                         sp += deferred;
                         cur = *ids.add(sp);
                         continue;
@@ -895,15 +817,48 @@ impl<const W: usize> Bvh<W> {
                         None => return,
                     }
                 }
-                // Next: the nearest deferred child not beyond the best hit.
-                loop {
-                    if sp == 0 {
-                        return;
+                match pop_within::<ORDERED>(ids, dists, &mut sp, t_max) {
+                    Some(next) => cur = next,
+                    None => return,
+                }
+            }
+        }
+    }
+
+    /// Start fetching the children deferred at `ids[deferred]` (an
+    /// incoherent ray spends most of its time waiting on memory, and they
+    /// wait until the nearest child's subtree is done).
+    ///
+    /// # Safety
+    /// `ids[deferred]` are children of this tree's nodes (written by a push).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn prefetch_deferred<const LINES: bool>(
+        &self,
+        ids: *const u32,
+        deferred: Range<usize>,
+        leaf: &impl Visit,
+    ) {
+        use std::arch::x86_64::*;
+        // SAFETY: per the contract, each entry read was written and is a
+        // child slot of this tree, so the addresses computed are within its
+        // nodes or its layout (a prefetch of any address is harmless besides).
+        unsafe {
+            for i in deferred {
+                let c = *ids.add(i);
+                if LINES {
+                    // A node's first four lines, or a leaf's
+                    // first block (three) and what follows.
+                    let p = self.lines.ptr.as_ptr().add((c & !LEAF) as usize) as *const i8;
+                    for line in 0..4 {
+                        _mm_prefetch::<_MM_HINT_T0>(p.add(64 * line));
                     }
-                    sp -= 1;
-                    if !ORDERED || *dists.add(sp) <= t_max {
-                        cur = *ids.add(sp);
-                        break;
+                } else if c & LEAF != 0 {
+                    leaf.prefetch((c & !LEAF) as usize);
+                } else {
+                    let p = self.node(c) as *const Node<W> as *const i8;
+                    for line in 0..std::mem::size_of::<Node<W>>() / 64 {
+                        _mm_prefetch::<_MM_HINT_T0>(p.add(64 * line));
                     }
                 }
             }
@@ -1023,7 +978,8 @@ impl<const W: usize> Bvh<W> {
     fn node_at(&self, i: u32) -> &Node<W> {
         let node_lines = std::mem::size_of::<Node<W>>() / 64;
         debug_assert!(i as usize + node_lines <= self.lines.len);
-        // SAFETY: as above, lines `i..i + node_lines` hold a node written by
+        // SAFETY: `i` is a node's line offset (the walk follows only those
+        // `interleave` wrote), so lines `i..i + node_lines` hold a node written by
         // `write_node` (every field a plain number, so any bytes are valid),
         // 64-byte aligned as `Node` is; the layout is immutable once made.
         unsafe { &*(self.lines.ptr.as_ptr().add(i as usize) as *const Node<W>) }
@@ -1035,7 +991,8 @@ impl<const W: usize> Bvh<W> {
     #[inline(always)]
     fn node(&self, i: u32) -> &Node<W> {
         debug_assert!((i as usize) < self.nodes.len());
-        // SAFETY: as above; the tree is immutable after the build.
+        // SAFETY: `i` is below `nodes.len()`: the walk follows only the
+        // indices `collapse` wrote, and the tree is immutable after the build.
         unsafe { self.nodes.get_unchecked(i as usize) }
     }
 }
@@ -1083,6 +1040,222 @@ fn descend<const W: usize>(node: &Node<W>, mask: u32, t_near: &[f32; W], stack: 
     }
 }
 
+/// What the 8-wide walk's node test needs of a ray, in vector registers,
+/// made once per ray.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Ray8 {
+    /// Float offset of each axis's near row within a node: the lower
+    /// corners where the direction is positive, the upper ones where not.
+    near: [usize; 3],
+    /// Float offset of each axis's far row.
+    far: [usize; 3],
+    /// Three times the ray's octant, as a shift count: it brings the
+    /// octant's rank of each slot (`Node::perm`) to the low bits.
+    shift: std::arch::x86_64::__m128i,
+    /// The origin, per axis.
+    o: [std::arch::x86_64::__m256; 3],
+    /// −1/d per axis: (o − b)·(−1/d) is (b − o)·(1/d) bit for bit
+    /// (negation is exact), and lets each row load fold into the
+    /// subtraction.
+    inv: [std::arch::x86_64::__m256; 3],
+    /// −(1/d)·`FAR_SCALE`: the conservative far side.
+    inv_far: [std::arch::x86_64::__m256; 3],
+    /// The ray's `t_min`, the entry distances' floor.
+    t_lo: std::arch::x86_64::__m256,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Ray8 {
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[inline(always)]
+    unsafe fn new<const W: usize>(pre: &Precomp, t_min: f32) -> Self {
+        use std::arch::x86_64::*;
+        let row = |upper: bool, a: usize| (if upper { 3 + a } else { a }) * W;
+        let octant = pre.neg[0] as u32 | (pre.neg[1] as u32) << 1 | (pre.neg[2] as u32) << 2;
+        // SAFETY: register arithmetic, on a CPU with AVX2 (the contract).
+        unsafe {
+            Ray8 {
+                near: [0, 1, 2].map(|a| row(pre.neg[a], a)),
+                far: [0, 1, 2].map(|a| row(!pre.neg[a], a)),
+                shift: _mm_cvtsi32_si128(3 * octant as i32),
+                o: pre.o.map(|x| _mm256_set1_ps(x)),
+                inv: pre.inv.map(|x| _mm256_set1_ps(-x)),
+                inv_far: pre.inv.map(|x| _mm256_set1_ps(-(x * FAR_SCALE))),
+                t_lo: _mm256_set1_ps(t_min),
+            }
+        }
+    }
+
+    /// The slab test of a node's eight boxes over `[t_min, t_max]`: which
+    /// the ray enters (all-ones lanes) and the entry distances.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2; `node` is an 8-wide node (64-byte aligned).
+    #[inline(always)]
+    unsafe fn test<const W: usize>(
+        &self,
+        node: &Node<W>,
+        t_max: f32,
+    ) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+        use std::arch::x86_64::*;
+        let base = node as *const Node<W> as *const f32;
+        // SAFETY: each load is a whole row of the node (eight floats at a
+        // 32-byte offset of a 64-byte aligned node, `near` and `far` being
+        // row offsets); the rest is register arithmetic on a CPU with AVX2.
+        unsafe {
+            let mut t0 = self.t_lo;
+            let mut t1 = _mm256_set1_ps(t_max);
+            for a in 0..3 {
+                let n = _mm256_load_ps(base.add(self.near[a]));
+                let f = _mm256_load_ps(base.add(self.far[a]));
+                // MAXPS/MINPS return the second operand when either is
+                // NaN (0·∞): the running bound stays in place.
+                t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(self.o[a], n), self.inv[a]), t0);
+                t1 = _mm256_min_ps(
+                    _mm256_mul_ps(_mm256_sub_ps(self.o[a], f), self.inv_far[a]),
+                    t1,
+                );
+            }
+            (_mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1), t0)
+        }
+    }
+}
+
+/// The lanes of `hit` set, as a bit mask (`X512`: through a mask register).
+///
+/// # Safety
+/// The CPU must have AVX2, and AVX-512 VL and DQ if `X512`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn lane_mask<const X512: bool>(hit: std::arch::x86_64::__m256) -> u32 {
+    use std::arch::x86_64::*;
+    // SAFETY: register arithmetic on a CPU with the features (the contract).
+    unsafe {
+        if X512 {
+            _mm256_movepi32_mask(_mm256_castps_si256(hit)) as u32
+        } else {
+            _mm256_movemask_ps(hit) as u32
+        }
+    }
+}
+
+/// Store the children of `node` the ray enters (`hit`) at `ids`, and
+/// their entry distances (`t0`) at `dists` if `ORDERED`: farthest first
+/// (by the octant's rank when `ORDERED`, by slot otherwise), so the
+/// nearest ends on top. AVX-512: the rank is compressed in a register and
+/// permutes children and distances; eight lanes are written.
+///
+/// # Safety
+/// The CPU must have AVX2 and AVX-512 F, VL and DQ; `ids` and `dists`
+/// have room for eight.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn push_by_compress<const ORDERED: bool, const W: usize>(
+    node: &Node<W>,
+    hit: std::arch::x86_64::__m256,
+    t0: std::arch::x86_64::__m256,
+    shift: std::arch::x86_64::__m128i,
+    (ids, dists): (*mut u32, *mut f32),
+) {
+    use std::arch::x86_64::*;
+    // SAFETY: the loads are a node's aligned `child` and `perm` rows
+    // (eight u32s, 32-byte aligned in a 64-byte aligned node); the stores
+    // are eight lanes at `ids` and `dists`, which have room (the contract).
+    unsafe {
+        let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
+        // The slots to push, farthest first (the stack's order, as
+        // `COMPRESS` makes it).
+        let backwards = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
+        let rank = if ORDERED {
+            let perm = _mm256_load_si256(node.perm.as_ptr() as *const __m256i);
+            // VPERMD reads the low three bits of each index: the
+            // octant's, after the shift.
+            _mm256_permutevar8x32_epi32(_mm256_srl_epi32(perm, shift), backwards)
+        } else {
+            backwards
+        };
+        let ranked = _mm256_permutevar8x32_epi32(_mm256_castps_si256(hit), rank);
+        let pick = _mm256_maskz_compress_epi32(_mm256_movepi32_mask(ranked), rank);
+        _mm256_storeu_si256(
+            ids as *mut __m256i,
+            _mm256_permutevar8x32_epi32(child, pick),
+        );
+        if ORDERED {
+            _mm256_storeu_ps(dists, _mm256_permutevar8x32_ps(t0, pick));
+        }
+    }
+}
+
+/// [`push_by_compress`] with AVX2 only: the ranked children and distances
+/// are each permuted by the `COMPRESS` entry of the ranked mask (`mask`:
+/// the lanes of `hit`).
+///
+/// # Safety
+/// The CPU must have AVX2; `ids` and `dists` have room for eight.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn push_by_table<const ORDERED: bool, const W: usize>(
+    node: &Node<W>,
+    hit: std::arch::x86_64::__m256,
+    t0: std::arch::x86_64::__m256,
+    mask: u32,
+    shift: std::arch::x86_64::__m128i,
+    (ids, dists): (*mut u32, *mut f32),
+) {
+    use std::arch::x86_64::*;
+    // SAFETY: the loads are a node's aligned `child` and `perm` rows and a
+    // `COMPRESS` entry (eight u32s, 32-byte aligned; the mask is below
+    // 256); the stores are eight lanes at `ids` and `dists`, which have
+    // room (the contract).
+    unsafe {
+        let child = _mm256_load_si256(node.child.as_ptr() as *const __m256i);
+        let (mut m, mut t, mut c) = (mask, t0, child);
+        if ORDERED {
+            let perm = _mm256_load_si256(node.perm.as_ptr() as *const __m256i);
+            // VPERMPS reads the low three bits of each index.
+            let rank = _mm256_srl_epi32(perm, shift);
+            m = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, rank)) as u32;
+            t = _mm256_permutevar8x32_ps(t0, rank);
+            c = _mm256_permutevar8x32_epi32(child, rank);
+        }
+        let pick = _mm256_load_si256(COMPRESS[m as usize].as_ptr() as *const __m256i);
+        _mm256_storeu_si256(ids as *mut __m256i, _mm256_permutevar8x32_epi32(c, pick));
+        if ORDERED {
+            // An any-hit query's t_max never narrows: every deferred child
+            // stays in range, no distance kept.
+            _mm256_storeu_ps(dists, _mm256_permutevar8x32_ps(t, pick));
+        }
+    }
+}
+
+/// Pop the nearest deferred child not beyond the best hit (`t_max`; an
+/// any-hit query's, `!ORDERED`, never narrows: it takes the top), or
+/// `None` when the stack runs out.
+///
+/// # Safety
+/// `ids` (and `dists` if `ORDERED`) hold `*sp` written entries.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn pop_within<const ORDERED: bool>(
+    ids: *const u32,
+    dists: *const f32,
+    sp: &mut usize,
+    t_max: f32,
+) -> Option<u32> {
+    // SAFETY: every read is below `*sp`, written (the contract).
+    unsafe {
+        while *sp > 0 {
+            *sp -= 1;
+            if !ORDERED || *dists.add(*sp) <= t_max {
+                return Some(*ids.add(*sp));
+            }
+        }
+        None
+    }
+}
+
 /// What a traversal does at a leaf: test the primitives of the leaf
 /// starting at entry `first` and return the narrowed `t_max`, or `None` to
 /// stop. Any `FnMut(usize) -> Option<f32>` will do; a hot path implements
@@ -1111,8 +1284,9 @@ pub trait Visit {
 /// 2 MiB pages (Linux's transparent huge pages, `madvise` mode). Why: an
 /// incoherent ray touches a few lines of each of a dozen 4 KiB pages of a
 /// layout of tens of MiB, and a TLB miss under a hypervisor's nested paging
-/// costs a walk of up to 24 memory references; measured +9 % on the
-/// dragon's incoherent rays and +13 % on its occlusion rays (BENCHMARKS.md).
+/// costs a walk of up to 24 memory references: the rays that jump across
+/// the layout, incoherent and occlusion rays, gain most (BENCHMARKS.md,
+/// issue 7).
 ///
 /// A layout of 2 MiB or more gets pages of its own (`mmap`), starting on a
 /// 2 MiB boundary, so every page of it can be a huge one. A heap copy
@@ -1138,7 +1312,8 @@ enum LinesOwner {
 // shared slices of plain bytes, and a mutable one only through `&mut self`
 // (`as_mut_slice`, while `interleave` fills it).
 unsafe impl Send for HugeLines {}
-// SAFETY: as above: shared access is read-only.
+// SAFETY: `&HugeLines` only reads (`as_slice`, the raw pointer the walks
+// load through); writing needs `&mut self`.
 unsafe impl Sync for HugeLines {}
 
 impl HugeLines {

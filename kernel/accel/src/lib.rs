@@ -11,6 +11,9 @@
 //!   chosen at run time, 4-wide SSE nodes, a portable test for both);
 //! - [`Mailbox`]: per-thread "tested already in this query" marks for
 //!   structures that reference a primitive from several cells;
+//! - [`CellAggregate`]: the queries such a structure (grid, octree,
+//!   kd-tree) answers by walking its cells along the ray, given how it finds
+//!   them ([`CellsAlongRay`]);
 //! - [`TriangleSolid`]: the interior of a closed triangle mesh (the paper's
 //!   "in interior" for objects made of triangles).
 
@@ -19,11 +22,13 @@
 #![deny(clippy::missing_safety_doc)]
 
 mod bvh;
+mod cell_walk;
 mod mailbox;
 mod prims;
 mod solid;
 
 pub use bvh::{BuildParams, Bvh, Bvh4, Bvh8, Line, Parallel, Simd, Slot, Visit, MAX_DEPTH, PAD};
+pub use cell_walk::{CellAggregate, CellsAlongRay};
 pub use mailbox::Mailbox;
 pub use prims::{tri_bounds, AnyHit, Gathered, Nearest, PrimRef, Primitives, WHOLE};
 pub use solid::TriangleSolid;

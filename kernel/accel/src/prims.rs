@@ -222,127 +222,275 @@ impl Tri4 {
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     unsafe fn test_sse(&self, r: &ScreenRay, t_min: f32, t_max: f32) -> Lanes4 {
-        use rtk_geom::gamma;
         use std::arch::x86_64::*;
-        let (o, k, s) = (r.o, r.k, r.s);
-        debug_assert!(k.iter().all(|&a| a < 3));
-        let mut out = Lanes4 {
-            hit: 0,
-            slow: 0,
-            t: [0.0; 4],
-            b1: [0.0; 4],
-            b2: [0.0; 4],
-        };
-        // SAFETY: `k` holds axes (0..3), so each row read is one of the
-        // block's (four floats, 16-byte aligned); the stores are to `out`'s
-        // arrays of four; the rest is register arithmetic.
+        debug_assert!(r.k.iter().all(|&a| a < 3));
+        // SAFETY: SSE2 is part of every x86_64 CPU (the contract), which is
+        // all the steps need: `shear4` reads the block's own rows, the rest
+        // is register arithmetic.
         unsafe {
-            let load = |vert: &[[f32; 4]; 3], a: usize| _mm_load_ps(vert.as_ptr().add(a).cast());
-            let (sx, sy, sz) = (_mm_set1_ps(s[0]), _mm_set1_ps(s[1]), _mm_set1_ps(s[2]));
-            let (ox, oy, oz) = (_mm_set1_ps(o[0]), _mm_set1_ps(o[1]), _mm_set1_ps(o[2]));
-            let mut px = [_mm_setzero_ps(); 3];
-            let mut py = [_mm_setzero_ps(); 3];
-            let mut pz = [_mm_setzero_ps(); 3];
-            for (vi, vert) in self.v.iter().enumerate() {
-                let tx = _mm_sub_ps(load(vert, k[0]), ox);
-                let ty = _mm_sub_ps(load(vert, k[1]), oy);
-                let tz = _mm_sub_ps(load(vert, k[2]), oz);
-                px[vi] = _mm_add_ps(tx, _mm_mul_ps(sx, tz));
-                py[vi] = _mm_add_ps(ty, _mm_mul_ps(sy, tz));
-                pz[vi] = _mm_mul_ps(tz, sz);
-            }
-            let cross =
-                |a: usize, b: usize| _mm_sub_ps(_mm_mul_ps(px[a], py[b]), _mm_mul_ps(py[a], px[b]));
-            let (e0, e1, e2) = (cross(1, 2), cross(2, 0), cross(0, 1));
-            let zero = _mm_setzero_ps();
-            let any = |f: unsafe fn(__m128, __m128) -> __m128| {
-                _mm_or_ps(_mm_or_ps(f(e0, zero), f(e1, zero)), f(e2, zero))
-            };
-            let has_zero = any(_mm_cmpeq_ps);
-            let mixed = _mm_and_ps(any(_mm_cmplt_ps), any(_mm_cmpgt_ps));
-            let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-            let ts = _mm_add_ps(
-                _mm_add_ps(_mm_mul_ps(e0, pz[0]), _mm_mul_ps(e1, pz[1])),
-                _mm_mul_ps(e2, pz[2]),
-            );
-            // The scalar test's widened limit, same operations in the same
-            // order, so a lane is rejected only where it rejects too.
-            let lim = _mm_mul_ps(
-                _mm_mul_ps(_mm_set1_ps(t_max), det),
-                _mm_set1_ps(1.0 + gamma::<f32>(4)),
-            );
-            let neg = _mm_cmplt_ps(det, zero);
-            let pos = _mm_cmpgt_ps(det, zero);
-            let within = _mm_andnot_ps(
-                mixed,
-                _mm_or_ps(
-                    _mm_and_ps(neg, _mm_cmpge_ps(ts, lim)),
-                    _mm_and_ps(pos, _mm_cmple_ps(ts, lim)),
-                ),
-            );
-            let zeros = _mm_movemask_ps(has_zero) as u32;
-            if _mm_movemask_ps(within) as u32 & !zeros == 0 {
+            let p = shear4(&self.v, r);
+            let e = edges4(&p);
+            let within = within_limit4(&e, t_max);
+            let zeros = _mm_movemask_ps(e.has_zero) as u32;
+            if _mm_movemask_ps(within.lanes) as u32 & !zeros == 0 {
                 // Nothing to finish here: every lane missed, or is the
                 // scalar test's (an exactly zero edge function).
-                out.slow = zeros;
-                return out;
+                return Lanes4 {
+                    hit: 0,
+                    slow: zeros,
+                    t: [0.0; 4],
+                    b1: [0.0; 4],
+                    b2: [0.0; 4],
+                };
             }
-            // pbrt-v4's error bound of ts, as the scalar test computes it.
-            let abs = |x: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), x);
-            let max3 = |v: [__m128; 3]| _mm_max_ps(_mm_max_ps(abs(v[0]), abs(v[1])), abs(v[2]));
-            let (max_zt, max_xt, max_yt) = (max3(pz), max3(px), max3(py));
-            let g = |n: u32| _mm_set1_ps(gamma::<f32>(n));
-            let dz = _mm_mul_ps(g(3), max_zt);
-            let dx = _mm_mul_ps(g(5), _mm_add_ps(max_xt, max_zt));
-            let dy = _mm_mul_ps(g(5), _mm_add_ps(max_yt, max_zt));
-            let de = _mm_mul_ps(
-                _mm_set1_ps(2.0),
-                _mm_add_ps(
-                    _mm_add_ps(
-                        _mm_mul_ps(_mm_mul_ps(g(2), max_xt), max_yt),
-                        _mm_mul_ps(dy, max_xt),
-                    ),
-                    _mm_mul_ps(dx, max_yt),
-                ),
-            );
-            let max_e = max3([e0, e1, e2]);
-            let ts_err = _mm_mul_ps(
-                _mm_set1_ps(3.0),
-                _mm_add_ps(
-                    _mm_add_ps(
-                        _mm_mul_ps(_mm_mul_ps(g(3), max_e), max_zt),
-                        _mm_mul_ps(de, max_zt),
-                    ),
-                    _mm_mul_ps(dz, max_e),
-                ),
-            );
-            let inv = _mm_div_ps(_mm_set1_ps(1.0), det);
-            let t = _mm_mul_ps(ts, inv);
-            let dt = _mm_mul_ps(ts_err, abs(inv));
-            let ahead = _mm_or_ps(
-                _mm_and_ps(neg, _mm_cmplt_ps(ts, zero)),
-                _mm_and_ps(pos, _mm_cmpgt_ps(ts, zero)),
-            );
-            // Behind the origin: a miss, unless within the error of 0.
-            let near0 = _mm_cmple_ps(abs(ts), ts_err);
-            let behind = _mm_and_ps(_mm_andnot_ps(ahead, within), near0);
-            let ahead = _mm_and_ps(ahead, within);
-            let clear = _mm_cmpgt_ps(t, dt);
-            let slow = _mm_or_ps(_mm_or_ps(has_zero, behind), _mm_andnot_ps(clear, ahead));
-            let hit = _mm_and_ps(
-                _mm_and_ps(ahead, clear),
-                _mm_and_ps(
-                    _mm_cmpgt_ps(t, _mm_set1_ps(t_min)),
-                    _mm_cmplt_ps(t, _mm_set1_ps(t_max)),
-                ),
-            );
-            out.slow = _mm_movemask_ps(slow) as u32;
-            out.hit = _mm_movemask_ps(_mm_andnot_ps(slow, hit)) as u32;
-            _mm_storeu_ps(out.t.as_mut_ptr(), t);
-            _mm_storeu_ps(out.b1.as_mut_ptr(), _mm_mul_ps(e1, inv));
-            _mm_storeu_ps(out.b2.as_mut_ptr(), _mm_mul_ps(e2, inv));
-            out
+            decide4(&e, ts_error4(&p, &e), &within, t_min, t_max)
         }
+    }
+}
+
+/// Four triangles' vertices in the ray's sheared space (pbrt-v4's
+/// watertight test: translated to the ray's origin, axes permuted so the
+/// ray runs along z, sheared so it is the z axis): `x[vertex]` holds the
+/// four lanes' x of that vertex, and so for `y` and `z`.
+#[cfg(target_arch = "x86_64")]
+struct Sheared4 {
+    x: [std::arch::x86_64::__m128; 3],
+    y: [std::arch::x86_64::__m128; 3],
+    z: [std::arch::x86_64::__m128; 3],
+}
+
+/// The three edge functions of four triangles and what they decide: lanes
+/// with an edge function exactly 0 (`has_zero`: the scalar test's, in
+/// f64), lanes whose edge functions differ in sign (`mixed`: a miss), the
+/// determinant (their sum) and the scaled distance `ts`.
+#[cfg(target_arch = "x86_64")]
+struct Edges4 {
+    e: [std::arch::x86_64::__m128; 3],
+    has_zero: std::arch::x86_64::__m128,
+    mixed: std::arch::x86_64::__m128,
+    det: std::arch::x86_64::__m128,
+    ts: std::arch::x86_64::__m128,
+}
+
+/// The lanes [`within_limit4`] keeps, with the determinant's sign (which
+/// way `ts` must lie).
+#[cfg(target_arch = "x86_64")]
+struct Within4 {
+    neg: std::arch::x86_64::__m128,
+    pos: std::arch::x86_64::__m128,
+    lanes: std::arch::x86_64::__m128,
+}
+
+/// The block's vertices `v` in the sheared space of `r`, the scalar test's
+/// operations in its order.
+///
+/// # Safety
+/// SSE2 (every x86_64 CPU); `r.k` holds axes (0..3).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn shear4(v: &[[[f32; 4]; 3]; 3], r: &ScreenRay) -> Sheared4 {
+    use std::arch::x86_64::*;
+    let (o, k, s) = (r.o, r.k, r.s);
+    // SAFETY: `k` holds axes (0..3), so each row read is one of the
+    // block's (four floats, 16-byte aligned); the rest is register
+    // arithmetic.
+    unsafe {
+        let load = |vert: &[[f32; 4]; 3], a: usize| _mm_load_ps(vert.as_ptr().add(a).cast());
+        let (sx, sy, sz) = (_mm_set1_ps(s[0]), _mm_set1_ps(s[1]), _mm_set1_ps(s[2]));
+        let (ox, oy, oz) = (_mm_set1_ps(o[0]), _mm_set1_ps(o[1]), _mm_set1_ps(o[2]));
+        let mut p = Sheared4 {
+            x: [_mm_setzero_ps(); 3],
+            y: [_mm_setzero_ps(); 3],
+            z: [_mm_setzero_ps(); 3],
+        };
+        for (vi, vert) in v.iter().enumerate() {
+            let tx = _mm_sub_ps(load(vert, k[0]), ox);
+            let ty = _mm_sub_ps(load(vert, k[1]), oy);
+            let tz = _mm_sub_ps(load(vert, k[2]), oz);
+            p.x[vi] = _mm_add_ps(tx, _mm_mul_ps(sx, tz));
+            p.y[vi] = _mm_add_ps(ty, _mm_mul_ps(sy, tz));
+            p.z[vi] = _mm_mul_ps(tz, sz);
+        }
+        p
+    }
+}
+
+/// The edge functions of the sheared triangles `p`, with the determinant
+/// and `ts` (plain products, as the scalar test: see
+/// [`intersect_triangle_sheared`]).
+///
+/// # Safety
+/// SSE2 (every x86_64 CPU).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn edges4(p: &Sheared4) -> Edges4 {
+    use std::arch::x86_64::*;
+    // SAFETY: register arithmetic on SSE2, part of every x86_64 CPU.
+    unsafe {
+        let (px, py, pz) = (&p.x, &p.y, &p.z);
+        let cross =
+            |a: usize, b: usize| _mm_sub_ps(_mm_mul_ps(px[a], py[b]), _mm_mul_ps(py[a], px[b]));
+        let (e0, e1, e2) = (cross(1, 2), cross(2, 0), cross(0, 1));
+        let zero = _mm_setzero_ps();
+        let any = |f: unsafe fn(__m128, __m128) -> __m128| {
+            _mm_or_ps(_mm_or_ps(f(e0, zero), f(e1, zero)), f(e2, zero))
+        };
+        let has_zero = any(_mm_cmpeq_ps);
+        let mixed = _mm_and_ps(any(_mm_cmplt_ps), any(_mm_cmpgt_ps));
+        let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
+        let ts = _mm_add_ps(
+            _mm_add_ps(_mm_mul_ps(e0, pz[0]), _mm_mul_ps(e1, pz[1])),
+            _mm_mul_ps(e2, pz[2]),
+        );
+        Edges4 {
+            e: [e0, e1, e2],
+            has_zero,
+            mixed,
+            det,
+            ts,
+        }
+    }
+}
+
+/// The lanes whose edge functions agree in sign and whose `ts` is within
+/// the scalar test's widened limit `t_max·det·(1 + γ₄)`: the same
+/// operations in the same order, so a lane is rejected only where the
+/// scalar test rejects it too.
+///
+/// # Safety
+/// SSE2 (every x86_64 CPU).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn within_limit4(e: &Edges4, t_max: f32) -> Within4 {
+    use rtk_geom::gamma;
+    use std::arch::x86_64::*;
+    // SAFETY: register arithmetic on SSE2, part of every x86_64 CPU.
+    unsafe {
+        let lim = _mm_mul_ps(
+            _mm_mul_ps(_mm_set1_ps(t_max), e.det),
+            _mm_set1_ps(1.0 + gamma::<f32>(4)),
+        );
+        let zero = _mm_setzero_ps();
+        let neg = _mm_cmplt_ps(e.det, zero);
+        let pos = _mm_cmpgt_ps(e.det, zero);
+        let lanes = _mm_andnot_ps(
+            e.mixed,
+            _mm_or_ps(
+                _mm_and_ps(neg, _mm_cmpge_ps(e.ts, lim)),
+                _mm_and_ps(pos, _mm_cmple_ps(e.ts, lim)),
+            ),
+        );
+        Within4 { neg, pos, lanes }
+    }
+}
+
+/// pbrt-v4's error bound of `ts`, as the scalar test computes it.
+///
+/// # Safety
+/// SSE2 (every x86_64 CPU).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn ts_error4(p: &Sheared4, e: &Edges4) -> std::arch::x86_64::__m128 {
+    use rtk_geom::gamma;
+    use std::arch::x86_64::*;
+    // SAFETY: register arithmetic on SSE2, part of every x86_64 CPU.
+    unsafe {
+        let max3 = |v: [__m128; 3]| _mm_max_ps(_mm_max_ps(abs4(v[0]), abs4(v[1])), abs4(v[2]));
+        let (max_zt, max_xt, max_yt) = (max3(p.z), max3(p.x), max3(p.y));
+        let g = |n: u32| _mm_set1_ps(gamma::<f32>(n));
+        let dz = _mm_mul_ps(g(3), max_zt);
+        let dx = _mm_mul_ps(g(5), _mm_add_ps(max_xt, max_zt));
+        let dy = _mm_mul_ps(g(5), _mm_add_ps(max_yt, max_zt));
+        let de = _mm_mul_ps(
+            _mm_set1_ps(2.0),
+            _mm_add_ps(
+                _mm_add_ps(
+                    _mm_mul_ps(_mm_mul_ps(g(2), max_xt), max_yt),
+                    _mm_mul_ps(dy, max_xt),
+                ),
+                _mm_mul_ps(dx, max_yt),
+            ),
+        );
+        let max_e = max3(e.e);
+        _mm_mul_ps(
+            _mm_set1_ps(3.0),
+            _mm_add_ps(
+                _mm_add_ps(
+                    _mm_mul_ps(_mm_mul_ps(g(3), max_e), max_zt),
+                    _mm_mul_ps(de, max_zt),
+                ),
+                _mm_mul_ps(dz, max_e),
+            ),
+        )
+    }
+}
+
+/// |x| per lane.
+///
+/// # Safety
+/// SSE2 (every x86_64 CPU).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn abs4(x: std::arch::x86_64::__m128) -> std::arch::x86_64::__m128 {
+    use std::arch::x86_64::*;
+    // SAFETY: register arithmetic on SSE2, part of every x86_64 CPU.
+    unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), x) }
+}
+
+/// Of the lanes `within` the limit, which hit in `(t_min, t_max)` (with
+/// their `t` and barycentrics) and which are left to the scalar test: a
+/// zero edge function, a `t` within its error bound `ts_err` of 0.
+///
+/// # Safety
+/// SSE2 (every x86_64 CPU).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn decide4(
+    e: &Edges4,
+    ts_err: std::arch::x86_64::__m128,
+    within: &Within4,
+    t_min: f32,
+    t_max: f32,
+) -> Lanes4 {
+    use std::arch::x86_64::*;
+    let mut out = Lanes4 {
+        hit: 0,
+        slow: 0,
+        t: [0.0; 4],
+        b1: [0.0; 4],
+        b2: [0.0; 4],
+    };
+    // SAFETY: register arithmetic on SSE2, part of every x86_64 CPU, and
+    // stores of four floats into `out`'s arrays of four.
+    unsafe {
+        let (neg, pos, ts, zero) = (within.neg, within.pos, e.ts, _mm_setzero_ps());
+        let within = within.lanes;
+        let inv = _mm_div_ps(_mm_set1_ps(1.0), e.det);
+        let t = _mm_mul_ps(ts, inv);
+        let dt = _mm_mul_ps(ts_err, abs4(inv));
+        let ahead = _mm_or_ps(
+            _mm_and_ps(neg, _mm_cmplt_ps(ts, zero)),
+            _mm_and_ps(pos, _mm_cmpgt_ps(ts, zero)),
+        );
+        // Behind the origin: a miss, unless within the error of 0.
+        let near0 = _mm_cmple_ps(abs4(ts), ts_err);
+        let behind = _mm_and_ps(_mm_andnot_ps(ahead, within), near0);
+        let ahead = _mm_and_ps(ahead, within);
+        let clear = _mm_cmpgt_ps(t, dt);
+        let slow = _mm_or_ps(_mm_or_ps(e.has_zero, behind), _mm_andnot_ps(clear, ahead));
+        let hit = _mm_and_ps(
+            _mm_and_ps(ahead, clear),
+            _mm_and_ps(
+                _mm_cmpgt_ps(t, _mm_set1_ps(t_min)),
+                _mm_cmplt_ps(t, _mm_set1_ps(t_max)),
+            ),
+        );
+        out.slow = _mm_movemask_ps(slow) as u32;
+        out.hit = _mm_movemask_ps(_mm_andnot_ps(slow, hit)) as u32;
+        _mm_storeu_ps(out.t.as_mut_ptr(), t);
+        _mm_storeu_ps(out.b1.as_mut_ptr(), _mm_mul_ps(e.e[1], inv));
+        _mm_storeu_ps(out.b2.as_mut_ptr(), _mm_mul_ps(e.e[2], inv));
+        out
     }
 }
 

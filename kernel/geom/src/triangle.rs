@@ -145,7 +145,7 @@ fn core_sheared<R: Real>(
         v[0] = v[0] + sx * v[2];
         v[1] = v[1] + sy * v[2];
     } // Plain products, not FMA-based differences: without a target FMA,
-      // `mul_add` is a library call (~2x slower here, BENCHMARKS.md). They stay
+      // `mul_add` is a library call (BENCHMARKS.md, "Watertight test"). They stay
       // watertight: a shared edge's function is computed from the same operands
       // in both triangles and comes out exactly negated; an exact zero goes to f64.
     let mut e0 = t[1][0] * t[2][1] - t[1][1] * t[2][0];

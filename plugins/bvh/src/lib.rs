@@ -149,13 +149,11 @@ impl Plugin for BvhObject {
 /// triangles at a time, so the SAH counts a leaf in blocks of four, each
 /// costing a node visit (Embree's builders' costs). Over triangles only, a
 /// leaf may hold up to 12 (three blocks): with the kernel's build filling
-/// each node before it makes leaves, the dragon's tree then has Embree's
-/// own statistics (12,717 nodes and 46,993 leaves against Embree's 13,754
-/// and 50,041; SAH 10.88 + 4.18 against 10.99 + 4.09); its primary rays
-/// run 7 % faster than with leaves of at most 4, the others as fast or
-/// faster within this VM's noise (BENCHMARKS.md). A leaf of
-/// other entries costs a call per entry, whatever the blocks say: there
-/// leaves stay at 4.
+/// each node before it makes leaves, the dragon's tree then has the shape
+/// of Embree's (node and leaf counts, SAH cost), and its primary rays run
+/// faster than with leaves of at most 4, the others no slower (BENCHMARKS.md,
+/// issue 7, "Fourth session: Embree's own tree"). A leaf of other entries
+/// costs a call per entry, whatever the blocks say: there leaves stay at 4.
 fn build_params(g: &rtk_kernel::accel::Gathered, max_leaf: Option<u32>) -> BuildParams {
     let tris = g.prims.all_triangles();
     BuildParams {

@@ -200,31 +200,69 @@ impl Distributed {
             return c;
         }
         let wo: Vec3 = -ray.dir.v().normalize();
-        let lobes = m.lobes();
-        let mut l = Color::BLACK;
-        // What the surface emits: seen by camera rays and specular bounces.
-        if lobes & lobe::EMISSION != 0 {
-            let le = m.emitted(ctx, &g, wo);
-            // After a glossy bounce, light that a light sample could have
-            // found was counted at the glossy vertex already.
-            if !le.is_black() {
-                let sampled =
-                    after_glossy && scene.light_pdf(ctx, ray.origin.v(), ray, Some(&g)) > 0.0;
-                if !sampled {
-                    l = le;
-                }
-            }
-        }
+        let mut l = self.emitted(ctx, scene, ray, &g, &m, wo, after_glossy);
         // Direct light, soft shadows from area lights.
         l = l.plus(self.direct(ctx, scene, ray, &g, &m, wo));
-        // The delta lobes, as whitted follows them (through `trace`), and
-        // with its work bound: from `branch_depth` on, only the stronger.
+        for (s, kind) in self
+            .specular_rays(ctx, ray, &g, &m, wo)
+            .into_iter()
+            .flatten()
+        {
+            let r = spawn_ray(&g, s.wi.v(), ray);
+            l = l.plus(s.weight.times(scene.trace(ctx, &r, kind)));
+        }
+        if m.lobes() & lobe::GLOSSY != 0 && self.glossy_samples > 0 {
+            l = l.plus(self.glossy(ctx, scene, ray, &g, &m, wo, after_glossy));
+        }
+        l
+    }
+
+    /// What the surface emits: seen by camera rays and specular bounces.
+    /// After a glossy bounce, light that a light sample could have found
+    /// was counted at the glossy vertex already.
+    #[allow(clippy::too_many_arguments)]
+    fn emitted(
+        &self,
+        ctx: &mut TraceCtx,
+        scene: &Scene,
+        ray: &Ray,
+        g: &LocalGeom,
+        m: &Material,
+        wo: Vec3,
+        after_glossy: bool,
+    ) -> Color {
+        if m.lobes() & lobe::EMISSION == 0 {
+            return Color::BLACK;
+        }
+        let le = m.emitted(ctx, g, wo);
+        if le.is_black() {
+            return Color::BLACK;
+        }
+        let sampled = after_glossy && scene.light_pdf(ctx, ray.origin.v(), ray, Some(g)) > 0.0;
+        if sampled {
+            Color::BLACK
+        } else {
+            le
+        }
+    }
+
+    /// The delta lobes' rays, as whitted follows them (through `trace`),
+    /// and with its work bound: from `branch_depth` on, only the stronger.
+    fn specular_rays(
+        &self,
+        ctx: &mut TraceCtx,
+        ray: &Ray,
+        g: &LocalGeom,
+        m: &Material,
+        wo: Vec3,
+    ) -> [Option<(BsdfSample, u32)>; 2] {
+        let lobes = m.lobes();
         let mut rays = [None, None];
         for (i, (want, kind)) in SPECULAR_LOBES.into_iter().enumerate() {
             if lobes & want != want {
                 continue;
             }
-            if let Some(s) = m.sample(ctx, &g, wo, [0.5, 0.5], want) {
+            if let Some(s) = m.sample(ctx, g, wo, [0.5, 0.5], want) {
                 rays[i] = Some((s, kind));
             }
         }
@@ -234,41 +272,49 @@ impl Distributed {
                 rays[usize::from(strength(b.weight) < strength(a.weight))] = None;
             }
         }
-        for (s, kind) in rays.into_iter().flatten() {
-            let r = spawn_ray(&g, s.wi.v(), ray);
-            l = l.plus(s.weight.times(scene.trace(ctx, &r, kind)));
-        }
-        // Glossy lobes: rays distributed by the material's own sampling.
-        if lobes & lobe::GLOSSY != 0 && self.glossy_samples > 0 {
-            let n = if after_glossy { 1 } else { self.glossy_samples };
-            let mut acc = Color::BLACK;
-            for k in 0..n {
-                let u = stratified(ctx, k, n);
-                let Some(s) = m.sample(ctx, &g, wo, u, GLOSSY_LOBES) else {
-                    continue;
-                };
-                // Only a glossy lobe's sample: a material that can only
-                // sample its diffuse and glossy terms together (phong)
-                // would make this diffuse interreflection, which Cook's
-                // method leaves out.
-                if s.lobe & lobe::GLOSSY == 0 || s.lobe & (lobe::DIFFUSE | lobe::SPECULAR) != 0 {
-                    continue;
-                }
-                if s.weight.is_black() || !s.weight.is_finite() {
-                    continue;
-                }
-                let r = spawn_ray(&g, s.wi.v(), ray);
-                let kind = if s.lobe & lobe::TRANSMISSION != 0 {
-                    ray_kind::REFRACTION
-                } else {
-                    ray_kind::REFLECTION
-                };
-                let li = self.radiance(ctx, scene, &r, kind, true);
-                acc = acc.plus(s.weight.times(li));
+        rays
+    }
+
+    /// Glossy lobes: the mean of `glossy_samples` rays (one after a glossy
+    /// bounce) distributed by the material's own sampling.
+    #[allow(clippy::too_many_arguments)]
+    fn glossy(
+        &self,
+        ctx: &mut TraceCtx,
+        scene: &Scene,
+        ray: &Ray,
+        g: &LocalGeom,
+        m: &Material,
+        wo: Vec3,
+        after_glossy: bool,
+    ) -> Color {
+        let n = if after_glossy { 1 } else { self.glossy_samples };
+        let mut acc = Color::BLACK;
+        for k in 0..n {
+            let u = stratified(ctx, k, n);
+            let Some(s) = m.sample(ctx, g, wo, u, GLOSSY_LOBES) else {
+                continue;
+            };
+            // Only a glossy lobe's sample: a material that can only
+            // sample its diffuse and glossy terms together (phong)
+            // would make this diffuse interreflection, which Cook's
+            // method leaves out.
+            if s.lobe & lobe::GLOSSY == 0 || s.lobe & (lobe::DIFFUSE | lobe::SPECULAR) != 0 {
+                continue;
             }
-            l = l.plus(acc.scale(1.0 / n as f32));
+            if s.weight.is_black() || !s.weight.is_finite() {
+                continue;
+            }
+            let r = spawn_ray(g, s.wi.v(), ray);
+            let kind = if s.lobe & lobe::TRANSMISSION != 0 {
+                ray_kind::REFRACTION
+            } else {
+                ray_kind::REFLECTION
+            };
+            let li = self.radiance(ctx, scene, &r, kind, true);
+            acc = acc.plus(s.weight.times(li));
         }
-        l
+        acc.scale(1.0 / n as f32)
     }
 }
 

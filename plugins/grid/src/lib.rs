@@ -1,7 +1,7 @@
 #![doc = include_str!("../README.md")]
 #![forbid(unsafe_code)]
 
-use rtk_kernel::accel::{Mailbox, Nearest, Primitives};
+use rtk_kernel::accel::{CellAggregate, CellsAlongRay, Primitives};
 use rtk_kernel::geom::RayBoxPrecomp;
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::serde::Deserialize;
@@ -38,7 +38,7 @@ struct Grid {
     children: Vec<Child>,
     density: f32,
     max_cells: u64,
-    built: Option<(Primitives, Cells, Mailbox)>,
+    built: Option<CellAggregate<Cells>>,
 }
 
 impl Plugin for Grid {
@@ -150,10 +150,17 @@ impl Cells {
             }
         }
     }
+}
 
-    /// Walk the cells the ray crosses within `(t_min, t_max)`, in order.
-    /// `cell(ids, t_exit)` tests a cell and returns the current best `t`, or
-    /// `None` to stop; the walk stops once the next cell starts beyond it.
+impl CellsAlongRay for Cells {
+    fn bounds(&self) -> Bounds3 {
+        self.bounds
+    }
+
+    /// Step from cell to cell along the ray (Amanatides and Woo's 3D-DDA):
+    /// from the cell where the ray enters the box, across whichever cell
+    /// boundary comes first, until the next cell starts beyond the best hit
+    /// or the ray leaves the box.
     #[inline]
     fn walk(&self, ray: &Ray, node_tests: &mut u64, mut cell: impl FnMut(&[u32]) -> Option<f32>) {
         let Some(h) = RayBoxPrecomp::new(ray).intersect(&self.bounds, ray.t_min, ray.t_max) else {
@@ -231,52 +238,26 @@ impl Object for Grid {
     fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
         let g = Primitives::gather(&self.children)?;
         let cells = Cells::build(&g.boxes, self.density, self.max_cells);
-        let mailbox = Mailbox::new(g.prims.len(), env.max_threads());
-        self.built = Some((g.prims, cells, mailbox));
+        self.built = Some(CellAggregate::new(g.prims, cells, env.max_threads()));
         Ok(())
     }
 
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
         self.built
             .as_ref()
-            .map_or(Bounds3::EMPTY, |(_, c, _)| c.bounds)
+            .map_or(Bounds3::EMPTY, CellAggregate::bounds)
     }
 
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
-        let Some((prims, cells, mailbox)) = &self.built else {
-            return false;
-        };
-        let mut q = Nearest::new(ray);
-        let query = Mailbox::query(ctx);
-        let mut nodes = 0;
-        cells.walk(ray, &mut nodes, |ids| {
-            mailbox.fresh(ctx, query, ids, |ctx, fresh| {
-                let fresh = fresh.iter().map(|&i| i as usize);
-                prims.intersect_ids(ctx, &mut q, fresh, hit, level);
-                true
-            });
-            Some(q.ray.t_max)
-        });
-        ctx.stats.node_tests += nodes;
-        q.found()
+        self.built
+            .as_ref()
+            .is_some_and(|b| b.intersect(ctx, ray, hit, level))
     }
 
     fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, level: u32) -> bool {
-        let Some((prims, cells, mailbox)) = &self.built else {
-            return false;
-        };
-        let query = Mailbox::query(ctx);
-        let mut found = false;
-        let mut nodes = 0;
-        cells.walk(ray, &mut nodes, |ids| {
-            mailbox.fresh(ctx, query, ids, |ctx, fresh| {
-                found = prims.occluded_ids(ctx, ray, fresh.iter().map(|&i| i as usize), level);
-                !found
-            });
-            (!found).then_some(ray.t_max)
-        });
-        ctx.stats.node_tests += nodes;
-        found
+        self.built
+            .as_ref()
+            .is_some_and(|b| b.occluded(ctx, ray, level))
     }
 
     fn local_geom(
@@ -288,8 +269,8 @@ impl Object for Grid {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        if let Some((prims, _, _)) = &self.built {
-            prims.local_geom(ctx, ray, hit, level, mask, out);
+        if let Some(b) = &self.built {
+            b.local_geom(ctx, ray, hit, level, mask, out);
         }
     }
 }

@@ -4,7 +4,7 @@
 mod traverse;
 mod tree;
 
-use rtk_kernel::accel::{Mailbox, Nearest, Primitives};
+use rtk_kernel::accel::{CellAggregate, CellsAlongRay, Primitives};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 use tree::{KdTree, Settings};
@@ -26,19 +26,10 @@ fn half() -> f32 {
     0.5
 }
 
-/// What `prepare` builds: the primitive table, the tree over it, and the
-/// marks that keep a primitive referenced by several leaves from being
-/// tested twice in one query.
-struct Built {
-    prims: Primitives,
-    tree: KdTree,
-    mailbox: Mailbox,
-}
-
 struct KdTreeAggregate {
     children: Vec<Child>,
     settings: Settings,
-    built: Option<Built>,
+    built: Option<CellAggregate<KdTree>>,
 }
 
 impl Plugin for KdTreeAggregate {
@@ -84,56 +75,26 @@ impl Object for KdTreeAggregate {
             tree.depth <= tree.max_depth,
             "the depth bound sizes the stack"
         );
-        let mailbox = Mailbox::new(g.prims.len(), env.max_threads());
-        self.built = Some(Built {
-            prims: g.prims,
-            tree,
-            mailbox,
-        });
+        self.built = Some(CellAggregate::new(g.prims, tree, env.max_threads()));
         Ok(())
     }
 
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
         self.built
             .as_ref()
-            .map_or(Bounds3::EMPTY, |b| b.tree.bounds)
+            .map_or(Bounds3::EMPTY, CellAggregate::bounds)
     }
 
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
-        let Some(b) = &self.built else {
-            return false;
-        };
-        let qid = Mailbox::query(ctx);
-        let mut q = Nearest::new(ray);
-        let mut nodes = 0;
-        b.tree.traverse(ray, &mut nodes, |leaf| {
-            b.mailbox.fresh(ctx, qid, leaf, |ctx, ids| {
-                let ids = ids.iter().map(|&i| i as usize);
-                b.prims.intersect_ids(ctx, &mut q, ids, hit, level);
-                true
-            });
-            Some(q.ray.t_max)
-        });
-        ctx.stats.node_tests += nodes;
-        q.found()
+        self.built
+            .as_ref()
+            .is_some_and(|b| b.intersect(ctx, ray, hit, level))
     }
 
     fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, level: u32) -> bool {
-        let Some(b) = &self.built else {
-            return false;
-        };
-        let qid = Mailbox::query(ctx);
-        let mut found = false;
-        let mut nodes = 0;
-        b.tree.traverse(ray, &mut nodes, |leaf| {
-            found = !b.mailbox.fresh(ctx, qid, leaf, |ctx, ids| {
-                let ids = ids.iter().map(|&i| i as usize);
-                !b.prims.occluded_ids(ctx, ray, ids, level)
-            });
-            (!found).then_some(ray.t_max)
-        });
-        ctx.stats.node_tests += nodes;
-        found
+        self.built
+            .as_ref()
+            .is_some_and(|b| b.occluded(ctx, ray, level))
     }
 
     fn local_geom(
@@ -146,8 +107,20 @@ impl Object for KdTreeAggregate {
         out: &mut LocalGeom,
     ) {
         if let Some(b) = &self.built {
-            b.prims.local_geom(ctx, ray, hit, level, mask, out);
+            b.local_geom(ctx, ray, hit, level, mask, out);
         }
+    }
+}
+
+/// The leaves along a ray are the kd-tree's cells.
+impl CellsAlongRay for KdTree {
+    fn bounds(&self) -> Bounds3 {
+        self.bounds
+    }
+
+    #[inline]
+    fn walk(&self, ray: &Ray, node_tests: &mut u64, leaf: impl FnMut(&[u32]) -> Option<f32>) {
+        self.traverse(ray, node_tests, leaf);
     }
 }
 

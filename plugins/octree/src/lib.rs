@@ -1,7 +1,7 @@
 #![doc = include_str!("../README.md")]
 #![forbid(unsafe_code)]
 
-use rtk_kernel::accel::{Mailbox, Nearest, Primitives};
+use rtk_kernel::accel::{CellAggregate, CellsAlongRay, Primitives};
 use rtk_kernel::geom::RayBoxPrecomp;
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::serde::Deserialize;
@@ -46,7 +46,7 @@ struct Octree {
     children: Vec<Child>,
     max_leaf: usize,
     max_depth: usize,
-    built: Option<(Primitives, Tree, Mailbox)>,
+    built: Option<CellAggregate<Tree>>,
 }
 
 impl Plugin for Octree {
@@ -145,11 +145,14 @@ impl Builder<'_> {
     }
 }
 
-impl Tree {
-    /// Visit the leaves the ray crosses, nearest octant first; `leaf(ids)`
-    /// returns the best `t` so far, or `None` to stop. Octants entered beyond
-    /// the best `t` are skipped (one entered exactly at it is still visited:
-    /// a tie may be won there).
+impl CellsAlongRay for Tree {
+    fn bounds(&self) -> Bounds3 {
+        self.cells[0].bounds
+    }
+
+    /// Descend from the root, nearest octant first (a stack of the octants
+    /// entered, farthest pushed first); an octant entered beyond the best
+    /// hit is skipped.
     #[inline]
     fn walk(&self, ray: &Ray, node_tests: &mut u64, mut leaf: impl FnMut(&[u32]) -> Option<f32>) {
         let pre = RayBoxPrecomp::new(ray);
@@ -228,52 +231,26 @@ impl Object for Octree {
             },
         };
         b.cell(0, (0..g.boxes.len() as u32).collect(), 0);
-        let mailbox = Mailbox::new(g.prims.len(), env.max_threads());
-        self.built = Some((g.prims, b.tree, mailbox));
+        self.built = Some(CellAggregate::new(g.prims, b.tree, env.max_threads()));
         Ok(())
     }
 
     fn bounds(&self, _t0: f32, _t1: f32) -> Bounds3 {
         self.built
             .as_ref()
-            .map_or(Bounds3::EMPTY, |(_, t, _)| t.cells[0].bounds)
+            .map_or(Bounds3::EMPTY, CellAggregate::bounds)
     }
 
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &mut Hit, level: u32) -> bool {
-        let Some((prims, tree, mailbox)) = &self.built else {
-            return false;
-        };
-        let mut q = Nearest::new(ray);
-        let query = Mailbox::query(ctx);
-        let mut nodes = 0;
-        tree.walk(ray, &mut nodes, |ids| {
-            mailbox.fresh(ctx, query, ids, |ctx, fresh| {
-                let fresh = fresh.iter().map(|&i| i as usize);
-                prims.intersect_ids(ctx, &mut q, fresh, hit, level);
-                true
-            });
-            Some(q.ray.t_max)
-        });
-        ctx.stats.node_tests += nodes;
-        q.found()
+        self.built
+            .as_ref()
+            .is_some_and(|b| b.intersect(ctx, ray, hit, level))
     }
 
     fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray, level: u32) -> bool {
-        let Some((prims, tree, mailbox)) = &self.built else {
-            return false;
-        };
-        let query = Mailbox::query(ctx);
-        let mut found = false;
-        let mut nodes = 0;
-        tree.walk(ray, &mut nodes, |ids| {
-            mailbox.fresh(ctx, query, ids, |ctx, fresh| {
-                found = prims.occluded_ids(ctx, ray, fresh.iter().map(|&i| i as usize), level);
-                !found
-            });
-            (!found).then_some(ray.t_max)
-        });
-        ctx.stats.node_tests += nodes;
-        found
+        self.built
+            .as_ref()
+            .is_some_and(|b| b.occluded(ctx, ray, level))
     }
 
     fn local_geom(
@@ -285,8 +262,8 @@ impl Object for Octree {
         mask: u32,
         out: &mut LocalGeom,
     ) {
-        if let Some((prims, _, _)) = &self.built {
-            prims.local_geom(ctx, ray, hit, level, mask, out);
+        if let Some(b) = &self.built {
+            b.local_geom(ctx, ray, hit, level, mask, out);
         }
     }
 }

@@ -161,6 +161,59 @@ impl Path {
     }
 }
 
+/// How light found along the sampled direction `bs` is weighted.
+/// `pdf_known`: whether the material reports densities, if the light
+/// sample learnt it.
+fn found_along(
+    ctx: &mut TraceCtx,
+    g: &LocalGeom,
+    m: &Material,
+    wo: Vec3,
+    bs: &BsdfSample,
+    pdf_known: Option<bool>,
+) -> Found {
+    if bs.lobe & lobe::SPECULAR != 0 {
+        return Found::Unweighted;
+    }
+    // `sample`'s density is the one MIS needs (that of all the lobes it may
+    // choose); ask `pdf` only to learn whether the material reports
+    // densities at all, if the light sample did not already.
+    let known = match pdf_known {
+        Some(k) => k,
+        None => m.pdf(ctx, g, wo, bs.wi.v(), lobe::ALL).is_some(),
+    };
+    if known {
+        Found::Weighed {
+            p: g.p.v(),
+            pdf: bs.pdf,
+        }
+    } else {
+        Found::NextEventOnly
+    }
+}
+
+/// The throughput `beta` of a path that survives Russian roulette
+/// (continued with probability `q`, its largest component up to 0.95,
+/// and reweighted by 1/q), or `None` when it ends.
+fn survive_roulette(ctx: &mut TraceCtx, beta: Color) -> Option<Color> {
+    let q = max_component(beta).min(0.95);
+    if !(ctx.rng.next_f32() < q) {
+        return None;
+    }
+    Some(beta.scale(1.0 / q))
+}
+
+/// The kind of ray a segment sampled from the lobe `sampled` is traced as.
+fn segment_kind(sampled: u32) -> u32 {
+    if sampled & lobe::TRANSMISSION != 0 {
+        ray_kind::REFRACTION
+    } else if sampled & lobe::SPECULAR != 0 {
+        ray_kind::REFLECTION
+    } else {
+        ray_kind::SCATTER
+    }
+}
+
 impl Integrator for Path {
     fn li(&self, ctx: &mut TraceCtx, scene: &Scene, camera_ray: &Ray) -> Color {
         let n_lights = scene.light_count();
@@ -211,44 +264,17 @@ impl Integrator for Path {
                 break;
             }
             beta = beta.times(bs.weight);
-            let wi = bs.wi.v();
-            found = if bs.lobe & lobe::SPECULAR != 0 {
-                Found::Unweighted
-            } else {
-                // `sample`'s density is the one MIS needs (that of all the
-                // lobes it may choose); ask `pdf` only to learn whether the
-                // material reports densities at all, if the light sample
-                // did not already.
-                let known = match pdf_known {
-                    Some(k) => k,
-                    None => m.pdf(ctx, &g, wo, wi, lobe::ALL).is_some(),
-                };
-                if known {
-                    Found::Weighed {
-                        p: g.p.v(),
-                        pdf: bs.pdf,
-                    }
-                } else {
-                    Found::NextEventOnly
-                }
-            };
+            found = found_along(ctx, &g, &m, wo, &bs, pdf_known);
             // Russian roulette after `rr_depth` scattering events (Mitsuba's
             // rule: the k-th hit, k ≥ rr_depth).
             if segments >= self.rr_depth {
-                let q = max_component(beta).min(0.95);
-                if !(ctx.rng.next_f32() < q) {
-                    break;
+                match survive_roulette(ctx, beta) {
+                    Some(b) => beta = b,
+                    None => break,
                 }
-                beta = beta.scale(1.0 / q);
             }
-            ray = spawn_ray(&g, wi, &ray);
-            kind = if bs.lobe & lobe::TRANSMISSION != 0 {
-                ray_kind::REFRACTION
-            } else if bs.lobe & lobe::SPECULAR != 0 {
-                ray_kind::REFLECTION
-            } else {
-                ray_kind::SCATTER
-            };
+            ray = spawn_ray(&g, bs.wi.v(), &ray);
+            kind = segment_kind(bs.lobe);
             segments += 1;
         }
         l

@@ -75,31 +75,7 @@ impl Plugin for PolygonObject {
             std::array::from_fn(|k| all().map(|p| p[k]).fold(f64::INFINITY, f64::min));
         let hi: [f64; 3] =
             std::array::from_fn(|k| all().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max));
-        let size = vec::norm64(std::array::from_fn(|k| hi[k] - lo[k]));
-        let tol = PLANARITY_TOLERANCE * size;
-        // The point farthest from the plane is the one named (with a single
-        // stray point, the one that strays).
-        let mut max_dev = 0.0f64;
-        let mut worst = String::new();
-        for (l, key) in loops.iter().zip(&keys) {
-            for (j, q) in l.iter().enumerate() {
-                let dev = vec::dot(n, vec::sub(*q, c)).abs();
-                if dev > max_dev {
-                    max_dev = dev;
-                    worst = format!("{key}[{j}]");
-                }
-            }
-        }
-        if max_dev > tol {
-            return Err(PluginError::key(
-                worst,
-                format!(
-                    "lies {max_dev:.3e} off the plane of the polygon's points, more than \
-                     {PLANARITY_TOLERANCE:e} of the polygon's size ({tol:.3e}): the points \
-                     must be coplanar"
-                ),
-            ));
-        }
+        let max_dev = check_coplanar(&loops, &keys, n, c, lo, hi)?;
         // The box of the points, widened by their distance from the plane
         // (hits lie on the plane).
         let (blo, bhi) = vec::f32_box(lo.map(|x| x - max_dev), hi.map(|x| x + max_dev));
@@ -138,6 +114,44 @@ impl Plugin for PolygonObject {
             v_len: (v1 - v0).max(tiny) as f32,
         })
     }
+}
+
+/// The largest distance of any point from the plane (n, c), or an error
+/// naming the point farthest from it (with a single stray point, the one
+/// that strays) when that exceeds the tolerance, relative to the size of
+/// the polygon's box `lo..hi`.
+fn check_coplanar(
+    loops: &[Vec<[f64; 3]>],
+    keys: &[String],
+    n: [f64; 3],
+    c: [f64; 3],
+    lo: [f64; 3],
+    hi: [f64; 3],
+) -> Result<f64, PluginError> {
+    let size = vec::norm64(std::array::from_fn(|k| hi[k] - lo[k]));
+    let tol = PLANARITY_TOLERANCE * size;
+    let mut max_dev = 0.0f64;
+    let mut worst = String::new();
+    for (l, key) in loops.iter().zip(keys) {
+        for (j, q) in l.iter().enumerate() {
+            let dev = vec::dot(n, vec::sub(*q, c)).abs();
+            if dev > max_dev {
+                max_dev = dev;
+                worst = format!("{key}[{j}]");
+            }
+        }
+    }
+    if max_dev > tol {
+        return Err(PluginError::key(
+            worst,
+            format!(
+                "lies {max_dev:.3e} off the plane of the polygon's points, more than \
+                 {PLANARITY_TOLERANCE:e} of the polygon's size ({tol:.3e}): the points \
+                 must be coplanar"
+            ),
+        ));
+    }
+    Ok(max_dev)
 }
 
 impl AnalyticShape for PolygonObject {

@@ -136,6 +136,125 @@ fn rtsafe<R: Real>(a: R, b: R, a_neg: bool, f: impl Fn(R) -> (R, R)) -> R {
     x
 }
 
+/// The ray in the normalised frame (step 1 of the module documentation):
+/// p(τ) = g + τe, τ = (t − s)·k, searched over `lo..hi`.
+struct Normalised<R> {
+    /// o − c.
+    f: V<R>,
+    /// o − c in the torus's frame.
+    fl: V<R>,
+    /// The unit direction, in the torus's frame.
+    e: V<R>,
+    /// The ray's point closest to the centre, in units of S.
+    g: V<R>,
+    /// |g|².
+    g2: R,
+    /// The `t` of that point.
+    s: R,
+    /// τ per unit of `t`: L/S.
+    k: R,
+    /// L, the length of the direction.
+    l: R,
+    /// 1/S.
+    inv_s: R,
+    /// The interval of τ searched: `(t_min, t_max)` clipped to the search
+    /// sphere.
+    lo: R,
+    hi: R,
+    /// The interval starts at `t_min`, not at the sphere.
+    from_origin: bool,
+}
+
+impl<R: Real> Normalised<R> {
+    /// G and its slope at τ = `x`.
+    #[inline]
+    fn g_at(&self, x: R, rn: R, sn: R) -> (R, R) {
+        g_and_slope(add(self.g, scale(self.e, x)), self.e, rn, sn)
+    }
+}
+
+/// The normalised quartic F(τ) = τ⁴ + c3τ³ + c2τ² + c1τ + c0 along the ray,
+/// through what its derivatives need (step 2 uses only those).
+struct Quartic<R> {
+    /// g·e: the roots of F'' are −β ± √(β² − c2/6).
+    beta: R,
+    c3: R,
+    c2: R,
+    c1: R,
+}
+
+impl<R: Real> Quartic<R> {
+    #[inline]
+    fn new(ray: &Normalised<R>, rn: R, sn: R) -> Self {
+        let (g, e) = (ray.g, ray.e);
+        let four = R::from_f64(4.0);
+        let two = R::from_f64(2.0);
+        let beta = dot(g, e);
+        let alpha = ray.g2 + rn * rn - sn * sn;
+        let r4 = four * rn * rn;
+        let exy2 = e[0] * e[0] + e[1] * e[1];
+        let gexy = g[0] * e[0] + g[1] * e[1];
+        Quartic {
+            beta,
+            c3: four * beta,
+            c2: four * beta * beta + two * alpha - r4 * exy2,
+            c1: four * alpha * beta - two * r4 * gexy,
+        }
+    }
+
+    /// F'(τ) = 4τ³ + 3c3τ² + 2c2τ + c1 and F''(τ) = 12τ² + 6c3τ + 2c2.
+    #[inline]
+    fn d1(&self, x: R) -> (R, R) {
+        let (c3, c2, c1) = (self.c3, self.c2, self.c1);
+        let (four, two) = (R::from_f64(4.0), R::from_f64(2.0));
+        let v = ((four * x + R::from_f64(3.0) * c3) * x + two * c2) * x + c1;
+        let dv = (R::from_f64(12.0) * x + R::from_f64(6.0) * c3) * x + two * c2;
+        (v, dv)
+    }
+
+    /// The ends of the pieces of `[lo, hi]` where F is monotonic, in
+    /// order, and how many: the roots of F'' split it where F' is
+    /// monotonic, and the roots of F' found in those pieces split it again.
+    #[inline]
+    fn monotonic_pieces(&self, lo: R, hi: R) -> ([R; 6], usize) {
+        let beta = self.beta;
+        // Roots of F'' (6τ² + 3c3τ + c2 = 0, i.e. τ = −β ± √(β² − c2/6)).
+        let mut cuts2 = [lo; 4];
+        let mut n2 = 1;
+        let disc2 = beta * beta - self.c2 / R::from_f64(6.0);
+        if disc2 > R::ZERO {
+            let sq = disc2.sqrt();
+            for x in [-beta - sq, -beta + sq] {
+                if x > lo && x < hi {
+                    cuts2[n2] = x;
+                    n2 += 1;
+                }
+            }
+        }
+        cuts2[n2] = hi;
+        n2 += 1;
+        // Roots of F' between them: where F is monotonic.
+        let d1 = |x: R| self.d1(x);
+        let mut cuts1 = [lo; 6];
+        let mut n1 = 1;
+        let mut pa = d1(cuts2[0]).0;
+        for i in 1..n2 {
+            let pb = d1(cuts2[i]).0;
+            if (pa < R::ZERO) != (pb < R::ZERO) && pa != R::ZERO && pb != R::ZERO {
+                let x = rtsafe(cuts2[i - 1], cuts2[i], pa < R::ZERO, d1);
+                if x > cuts1[n1 - 1] && x < hi {
+                    cuts1[n1] = x;
+                    n1 += 1;
+                }
+            }
+            pa = pb;
+        }
+        cuts1[n1] = hi;
+        n1 += 1;
+        (cuts1, n1)
+    }
+}
+
 impl<R: Real> Torus<R> {
     /// From parameters in f64.
     pub fn new(c: [f64; 3], axis: [f64; 3], big: f64, small: f64) -> Self {
@@ -169,6 +288,18 @@ impl<R: Real> Torus<R> {
     /// Nearest hit of `o + t d` in `(t_min, t_max)`, if any (see the module
     /// documentation for the method).
     pub fn intersect(&self, o: V<R>, d: V<R>, t_min: R, t_max: R) -> Option<R> {
+        let ray = self.normalise(o, d, t_min, t_max)?;
+        let quartic = Quartic::new(&ray, self.rn, self.sn);
+        let (cuts, n) = quartic.monotonic_pieces(ray.lo, ray.hi);
+        let (g_lo, origin_on_surface) = self.g_at_start(o, &ray, t_min);
+        self.first_root(&ray, &cuts[..n], g_lo, origin_on_surface, t_min, t_max)
+    }
+
+    /// Step 1: the ray shifted to its point closest to the centre, made
+    /// unit and scaled by 1/S, with the τ interval to search; `None` when
+    /// it misses the bounding sphere or the interval is empty.
+    #[inline]
+    fn normalise(&self, o: V<R>, d: V<R>, t_min: R, t_max: R) -> Option<Normalised<R>> {
         let one = R::ONE;
         let f = sub(o, self.c);
         let fl = to_local(&self.frame, f);
@@ -205,94 +336,96 @@ impl<R: Real> Torus<R> {
         if !(lo < hi) {
             return None;
         }
+        Some(Normalised {
+            f,
+            fl,
+            e,
+            g,
+            g2,
+            s,
+            k,
+            l,
+            inv_s,
+            lo,
+            hi,
+            from_origin,
+        })
+    }
 
-        // The quartic F(τ) = τ⁴ + c3τ³ + c2τ² + c1τ + c0 (normalised).
+    /// G at the start of the interval, and whether the ray starts on the
+    /// surface (step 4): from the unshifted origin's own coordinates when
+    /// the interval starts there, so a ray leaving the surface starts on
+    /// the right side.
+    #[inline]
+    fn g_at_start(&self, o: V<R>, ray: &Normalised<R>, t_min: R) -> (R, bool) {
         let (rn, sn) = (self.rn, self.sn);
-        let four = R::from_f64(4.0);
-        let two = R::from_f64(2.0);
-        let beta = dot(g, e);
-        let alpha = g2 + rn * rn - sn * sn;
-        let r4 = four * rn * rn;
-        let exy2 = e[0] * e[0] + e[1] * e[1];
-        let gexy = g[0] * e[0] + g[1] * e[1];
-        let c3 = four * beta;
-        let c2 = four * beta * beta + two * alpha - r4 * exy2;
-        let c1 = four * alpha * beta - two * r4 * gexy;
-        // F'(τ) = 4τ³ + 3c3τ² + 2c2τ + c1, F''(τ) = 12τ² + 6c3τ + 2c2.
-        let d1 = |x: R| {
-            let v = ((four * x + R::from_f64(3.0) * c3) * x + two * c2) * x + c1;
-            let dv = (R::from_f64(12.0) * x + R::from_f64(6.0) * c3) * x + two * c2;
-            (v, dv)
-        };
-
-        // Roots of F'' (6τ² + 3c3τ + c2 = 0, i.e. τ = −β ± √(β² − c2/6)).
-        let mut cuts2 = [lo; 4];
-        let mut n2 = 1;
-        let disc2 = beta * beta - c2 / R::from_f64(6.0);
-        if disc2 > R::ZERO {
-            let sq = disc2.sqrt();
-            for x in [-beta - sq, -beta + sq] {
-                if x > lo && x < hi {
-                    cuts2[n2] = x;
-                    n2 += 1;
-                }
-            }
+        if !ray.from_origin {
+            return (ray.g_at(ray.lo, rn, sn).0, false);
         }
-        cuts2[n2] = hi;
-        n2 += 1;
-        // Roots of F' between them: where F is monotonic.
-        let mut cuts1 = [lo; 6];
-        let mut n1 = 1;
-        let mut pa = d1(cuts2[0]).0;
-        for i in 1..n2 {
-            let pb = d1(cuts2[i]).0;
-            if (pa < R::ZERO) != (pb < R::ZERO) && pa != R::ZERO && pb != R::ZERO {
-                let x = rtsafe(cuts2[i - 1], cuts2[i], pa < R::ZERO, d1);
-                if x > cuts1[n1 - 1] && x < hi {
-                    cuts1[n1] = x;
-                    n1 += 1;
-                }
-            }
-            pa = pb;
-        }
-        cuts1[n1] = hi;
-        n1 += 1;
-
-        // Signs of G at the piece ends; the origin's from its own coordinates.
-        let at = |x: R| g_and_slope(add(g, scale(e, x)), e, rn, sn);
-        let (g_lo, origin_on_surface) = if from_origin && t_min == R::ZERO {
-            let (gv, on) = self.on_surface(scale(fl, inv_s), e, self.origin_band(o, f) * inv_s);
-            (gv, on)
-        } else if from_origin {
+        if t_min != R::ZERO {
             // The interval starts at a point of the ray (`t_min`, where a
             // query for "the next hit after t" starts, as CSG asks): a root
             // there was the last hit, and must not be found again a few
             // ulps later. Its band adds the rounding of o + t_min·d.
-            let band = self.origin_band(o, f) + gamma::<R>(3) * t_min.abs() * abs1(dl);
-            let start = scale(add(fl, scale(dl, t_min)), inv_s);
-            (at(lo).0, self.on_surface(start, e, band * inv_s).1)
-        } else {
-            (at(lo).0, false)
-        };
-        let t_err = gamma::<R>(8) * (s.abs() + self.s / l);
+            let band =
+                self.origin_band(o, ray.f) + gamma::<R>(3) * t_min.abs() * ray.l * abs1(ray.e);
+            let start = scale(add(ray.fl, scale(ray.e, ray.l * t_min)), ray.inv_s);
+            let on = self.on_surface(start, ray.e, band * ray.inv_s).1;
+            return (ray.g_at(ray.lo, rn, sn).0, on);
+        }
+        let band = self.origin_band(o, ray.f) * ray.inv_s;
+        self.on_surface(scale(ray.fl, ray.inv_s), ray.e, band)
+    }
+
+    /// G at the normalised point `po` (direction `e`), and whether `po`
+    /// lies on the surface within the normalised error band `band`:
+    /// |G| = |D − r|(D + r), D the distance from the core circle.
+    fn on_surface(&self, po: V<R>, e: V<R>, band: R) -> (R, bool) {
+        let (rn, sn) = (self.rn, self.sn);
+        let gv = g_and_slope(po, e, rn, sn).0;
+        let rho = (po[0] * po[0] + po[1] * po[1]).sqrt();
+        let dr = rho - rn;
+        let dcore = (dr * dr + po[2] * po[2]).sqrt();
+        (gv, gv.abs() <= (dcore + sn) * band)
+    }
+
+    /// Step 3: the first piece (ends `cuts`) where G changes sign, its root
+    /// refined on G and returned as `t` if it lies in `(t_min, t_max)` and
+    /// beyond the error of `t` at the origin; a root exactly at a piece end
+    /// is taken too. `g_lo`: G at the first end; `origin_on_surface`: the
+    /// first piece starts on the surface, whose root there is dropped.
+    #[inline]
+    fn first_root(
+        &self,
+        ray: &Normalised<R>,
+        cuts: &[R],
+        g_lo: R,
+        origin_on_surface: bool,
+        t_min: R,
+        t_max: R,
+    ) -> Option<R> {
+        let (rn, sn) = (self.rn, self.sn);
+        let at = |x: R| ray.g_at(x, rn, sn);
+        let t_err = gamma::<R>(8) * (ray.s.abs() + self.s / ray.l);
+        let accept = |t: R| t > t_min && t < t_max && t > t_err && t.is_finite();
         let mut ga = g_lo;
-        for i in 1..n1 {
-            let gb = at(cuts1[i]).0;
+        for i in 1..cuts.len() {
+            let gb = at(cuts[i]).0;
             let skip = i == 1 && origin_on_surface;
             if !skip && (ga < R::ZERO) != (gb < R::ZERO) && gb != R::ZERO {
                 let x = if ga == R::ZERO {
-                    cuts1[i - 1]
+                    cuts[i - 1]
                 } else {
-                    rtsafe(cuts1[i - 1], cuts1[i], ga < R::ZERO, at)
+                    rtsafe(cuts[i - 1], cuts[i], ga < R::ZERO, at)
                 };
-                let t = s + x / k;
-                if t > t_min && t < t_max && t > t_err && t.is_finite() {
+                let t = ray.s + x / ray.k;
+                if accept(t) {
                     return Some(t);
                 }
             } else if gb == R::ZERO {
                 // A root exactly at a piece end: take it (not at the origin).
-                let t = s + cuts1[i] / k;
-                if t > t_min && t < t_max && t > t_err && t.is_finite() {
+                let t = ray.s + cuts[i] / ray.k;
+                if accept(t) {
                     return Some(t);
                 }
             }
@@ -306,18 +439,6 @@ impl<R: Real> Torus<R> {
     /// [`Torus::surface`]; Σ|nᵢ| ≤ √3), plus the rounding of the local
     /// coordinates, γ₆|f|₁ (f = o − c).
     #[inline]
-    /// G at the normalised point `po` (direction `e`), and whether `po`
-    /// lies on the surface within the normalised error band `band`:
-    /// |G| = |D − r|(D + r), D the distance from the core circle.
-    fn on_surface(&self, po: V<R>, e: V<R>, band: R) -> (R, bool) {
-        let (rn, sn) = (self.rn, self.sn);
-        let gv = g_and_slope(po, e, rn, sn).0;
-        let rho = (po[0] * po[0] + po[1] * po[1]).sqrt();
-        let dr = rho - rn;
-        let dcore = (dr * dr + po[2] * po[2]).sqrt();
-        (gv, gv.abs() <= (dcore + sn) * band)
-    }
-
     fn origin_band(&self, o: V<R>, f: V<R>) -> R {
         gamma::<R>(2) * abs1(o) + gamma::<R>(6) * abs1(f) + gamma::<R>(24) * self.s
     }
@@ -748,7 +869,6 @@ mod tests {
         println!("grazing: {mism} mismatches of {}", 2 * n);
     }
 }
-
 #[cfg(test)]
 mod next_hit_tests {
     use super::*;

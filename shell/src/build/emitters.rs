@@ -64,13 +64,9 @@ impl Builder<'_> {
         };
         let child_shifted = shifted && inst.transform.is_none();
         let data = self.bindings(inst)?;
-        let emits = self
-            .shaders
-            .get(data.shader as usize)
-            .is_some_and(|s| s.lobes() & lobe::EMISSION != 0);
         let desc = self.desc;
         let od = &desc.objects[&inst.object];
-        if emits {
+        if self.emits(&data) {
             if seen.insert(inst.path.clone(), ()).is_some() {
                 return Err(SceneError::invalid(
                     &inst.origin,
@@ -83,72 +79,95 @@ impl Builder<'_> {
                     ),
                 ));
             }
-            let object = self.made_object(&inst.object, child_shifted);
-            let Some(object) = object.filter(|o| o.samples_surface()) else {
-                return Err(SceneError::new(
-                    ErrorKind::Invalid,
-                    &inst.origin,
-                    &inst.path,
-                    "shader",
-                    format!(
-                        "the shader `{}` emits, but object `{}` (class `{}`) cannot sample its \
-                         surface, so it cannot be an area light; bind the shader to its \
-                         primitives (mesh, sphere, disk, polygon...) instead",
-                        inst.shader.as_deref().unwrap_or(""),
-                        inst.object,
-                        od.def.class
-                    ),
-                ));
-            };
-            let mut ctx = rtk_kernel::TraceCtx::new(0, 1, 0);
-            let area = object
-                .sample_surface(&mut ctx, [0.5, 0.5])
-                .map_or(0.0, |s| s.area);
-            if !(area > 0.0 && area.is_finite()) {
-                return Err(SceneError::invalid(
-                    &inst.origin,
-                    &inst.path,
-                    "shader",
-                    format!(
-                        "object `{}` is bound to the emitting shader `{}` but has no surface \
-                         area to emit from",
-                        inst.object,
-                        inst.shader.as_deref().unwrap_or("")
-                    ),
-                ));
-            }
-            // Below the first transform, objects are made unshifted and the
-            // transform absorbed the shift (objects.rs).
-            let to_world = match m {
-                Some(m) => DAffine3::from_translation(-glam::DVec3::from(desc.render.origin)) * m,
-                None => DAffine3::IDENTITY,
-            };
+            let object = self.emitting_object(inst, child_shifted)?;
             out.push(Emitter {
                 object,
                 inst: data,
-                to_world,
+                to_world: self.placement(m),
                 path: inst.path.clone(),
                 origin: inst.origin.clone(),
             });
         }
         if rtk_kernel::classes::PLACE_THEIR_CHILD.contains(&od.def.class.as_str()) {
-            // Its matrix is the plugin's to read: lights below it cannot be
-            // placed. Refuse only if one is there.
-            return if self.any_emitter_below(&inst.object)? {
-                Err(SceneError::invalid(
-                    &inst.origin,
-                    &inst.path,
-                    "object",
-                    "an emitting instance below an object of class `transform` or `motion` \
-                     cannot be placed as a light; use the instance's `transform` list instead",
-                ))
-            } else {
-                Ok(())
-            };
+            return self.refuse_emitters_below(inst);
         }
-        let children_shifted = child_shifted;
         for c in &super::objects::expand_groups(desc, &od.children) {
-            self.walk(c, m, children_shifted, seen, out)?;
+            self.walk(c, m, child_shifted, seen, out)?;
+        }
+        Ok(())
+    }
+
+    /// Whether the shader of bindings `data` emits.
+    fn emits(&self, data: &InstanceData) -> bool {
+        self.shaders
+            .get(data.shader as usize)
+            .is_some_and(|s| s.lobes() & lobe::EMISSION != 0)
+    }
+
+    /// The object of the emitting instance `inst`, made `shifted` or not:
+    /// it must sample its surface and have an area to emit from.
+    fn emitting_object(&self, inst: &Instance, shifted: bool) -> Result<Object, SceneError> {
+        let object = self.made_object(&inst.object, shifted);
+        let Some(object) = object.filter(|o| o.samples_surface()) else {
+            let od = &self.desc.objects[&inst.object];
+            return Err(SceneError::new(
+                ErrorKind::Invalid,
+                &inst.origin,
+                &inst.path,
+                "shader",
+                format!(
+                    "the shader `{}` emits, but object `{}` (class `{}`) cannot sample its \
+                     surface, so it cannot be an area light; bind the shader to its \
+                     primitives (mesh, sphere, disk, polygon...) instead",
+                    inst.shader.as_deref().unwrap_or(""),
+                    inst.object,
+                    od.def.class
+                ),
+            ));
+        };
+        let mut ctx = rtk_kernel::TraceCtx::new(0, 1, 0);
+        let area = object
+            .sample_surface(&mut ctx, [0.5, 0.5])
+            .map_or(0.0, |s| s.area);
+        if !(area > 0.0 && area.is_finite()) {
+            return Err(SceneError::invalid(
+                &inst.origin,
+                &inst.path,
+                "shader",
+                format!(
+                    "object `{}` is bound to the emitting shader `{}` but has no surface \
+                     area to emit from",
+                    inst.object,
+                    inst.shader.as_deref().unwrap_or("")
+                ),
+            ));
+        }
+        Ok(object)
+    }
+
+    /// An emitting object's own space to the renderer's, given `m`, the
+    /// transforms of the instances above it: below the first transform,
+    /// objects are made unshifted and the transform absorbed the shift
+    /// (objects.rs), so the shift is applied here.
+    fn placement(&self, m: Option<DAffine3>) -> DAffine3 {
+        match m {
+            Some(m) => DAffine3::from_translation(-glam::DVec3::from(self.desc.render.origin)) * m,
+            None => DAffine3::IDENTITY,
+        }
+    }
+
+    /// Below an object that places its child itself (`transform`,
+    /// `motion`), the matrix is the plugin's to read: lights there cannot
+    /// be placed. Refuse only if one is there.
+    fn refuse_emitters_below(&mut self, inst: &Instance) -> Result<(), SceneError> {
+        if self.any_emitter_below(&inst.object)? {
+            return Err(SceneError::invalid(
+                &inst.origin,
+                &inst.path,
+                "object",
+                "an emitting instance below an object of class `transform` or `motion` \
+                 cannot be placed as a light; use the instance's `transform` list instead",
+            ));
         }
         Ok(())
     }
@@ -157,11 +176,7 @@ impl Builder<'_> {
         let desc = self.desc;
         for c in &super::objects::expand_groups(desc, &desc.objects[name].children) {
             let data = self.bindings(c)?;
-            let emits = self
-                .shaders
-                .get(data.shader as usize)
-                .is_some_and(|s| s.lobes() & lobe::EMISSION != 0);
-            if emits || self.any_emitter_below(&c.object)? {
+            if self.emits(&data) || self.any_emitter_below(&c.object)? {
                 return Ok(true);
             }
         }

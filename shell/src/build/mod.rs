@@ -17,7 +17,7 @@ mod reach;
 pub use emitters::Emitter;
 pub use prepare::{Parallel, Sequential};
 
-use crate::desc::{Def, Desc};
+use crate::desc::{Def, Desc, Instance};
 use crate::error::{ErrorKind, SceneError};
 use crate::file::SceneFile;
 use crate::plugins::{Module, Plugin, Registry};
@@ -90,6 +90,20 @@ fn build_world(
     registry: &mut Registry,
     parallel: &dyn Parallel,
 ) -> Result<World, SceneError> {
+    refuse_group_root(&desc)?;
+    let reach = reach::Reach::walk(&desc)?;
+    let t0 = Instant::now();
+    let loaded = needs::load(&desc, &reach, registry)?;
+    let load_plugins = t0.elapsed();
+    let (mut world, emitters) = create_world(file, desc, registry, parallel, loaded)?;
+    world.timings.load_plugins = load_plugins;
+    add_area_lights(&mut world, registry, file, &emitters)?;
+    Ok(world)
+}
+
+/// A group is expanded into the object instancing it, so it cannot be the
+/// root.
+fn refuse_group_root(desc: &Desc) -> Result<(), SceneError> {
     let root = &desc.render.root;
     if desc
         .objects
@@ -107,11 +121,20 @@ fn build_world(
             ),
         ));
     }
-    let reach = reach::Reach::walk(&desc)?;
-    let t0 = Instant::now();
-    let needs::Loaded { plugins, accel } = needs::load(&desc, &reach, registry)?;
-    let load_plugins = t0.elapsed();
+    Ok(())
+}
 
+/// Everything but the area lights, with the plugins `loaded`: the camera,
+/// the integrator and the scene's lights, then the objects reachable from
+/// the root, each created once and prepared; and the emitting instances
+/// the area lights will stand for.
+fn create_world(
+    file: &SceneFile,
+    desc: Desc,
+    registry: &mut Registry,
+    parallel: &dyn Parallel,
+    loaded: needs::Loaded,
+) -> Result<(World, Vec<Emitter>), SceneError> {
     let host = PrepareHost {
         par: parallel,
         files: Mutex::new(Vec::new()),
@@ -122,7 +145,7 @@ fn build_world(
         file.dir().to_string_lossy().into_owned(),
         host,
     );
-    b.accel = accel;
+    b.accel = loaded.accel;
     let t1 = Instant::now();
     let Others {
         camera,
@@ -135,28 +158,7 @@ fn build_world(
     let root_bind = b.bindings(root_inst)?;
     let emitters = b.emitters(root_inst)?;
     let environment = environment(&desc, &lights)?;
-    let bounds = root.bounds(0.0, 1.0).map_err(|e| {
-        SceneError::new(
-            ErrorKind::PluginCall,
-            &root_inst.origin,
-            "render",
-            "root",
-            format!("plugin `{}` {e}", root.class_name()),
-        )
-    })?;
-    let files_read = b
-        .prepare_host
-        .files
-        .lock()
-        .map(|f| f.clone())
-        .unwrap_or_default();
-    let timings = Timings {
-        load_plugins,
-        create: b.create_time,
-        prepare: b.prepare_time,
-        prepare_by_class: std::mem::take(&mut b.prepare_by_class),
-    };
-    let (shaders, objects_created) = (std::mem::take(&mut b.shaders), b.objects_created);
+    let bounds = root_bounds(&root, root_inst)?;
     if b.area_light_count() != emitters.len() {
         return Err(SceneError::invalid(
             &root_inst.origin,
@@ -165,25 +167,21 @@ fn build_world(
             "an emitting binding has no instance to stand for (a bug in rtk)",
         ));
     }
-    drop(b);
-    let mut lights = lights;
-    let mut plugins = plugins;
-    let t2 = Instant::now();
-    let (area, area_plugin) = emitters::area_lights(
-        registry,
-        &desc,
-        &file.dir().to_string_lossy(),
-        lights.len(),
-        &emitters,
-        &shaders,
-    )?;
-    lights.extend(area);
-    plugins.extend(area_plugin);
+    let files_read = b
+        .prepare_host
+        .files
+        .lock()
+        .map(|f| f.clone())
+        .unwrap_or_default();
     let timings = Timings {
-        create: timings.create + t2.elapsed(),
-        ..timings
+        load_plugins: Duration::ZERO,
+        create: b.create_time,
+        prepare: b.prepare_time,
+        prepare_by_class: std::mem::take(&mut b.prepare_by_class),
     };
-    Ok(World {
+    let (shaders, objects_created) = (std::mem::take(&mut b.shaders), b.objects_created);
+    drop(b);
+    let world = World {
         desc,
         root,
         root_inst: root_bind,
@@ -193,11 +191,48 @@ fn build_world(
         lights,
         environment,
         shaders,
-        plugins,
+        plugins: loaded.plugins,
         files_read,
         timings,
         objects_created,
+    };
+    Ok((world, emitters))
+}
+
+/// The world bounds over the shutter interval, as the root reports them.
+fn root_bounds(root: &Object, root_inst: &Instance) -> Result<Bounds3, SceneError> {
+    root.bounds(0.0, 1.0).map_err(|e| {
+        SceneError::new(
+            ErrorKind::PluginCall,
+            &root_inst.origin,
+            "render",
+            "root",
+            format!("plugin `{}` {e}", root.class_name()),
+        )
     })
+}
+
+/// One area light per emitting instance, after the scene's own lights
+/// (their time counts as creation).
+fn add_area_lights(
+    world: &mut World,
+    registry: &mut Registry,
+    file: &SceneFile,
+    emitters: &[Emitter],
+) -> Result<(), SceneError> {
+    let t2 = Instant::now();
+    let (area, area_plugin) = emitters::area_lights(
+        registry,
+        &world.desc,
+        &file.dir().to_string_lossy(),
+        world.lights.len(),
+        emitters,
+        &world.shaders,
+    )?;
+    world.lights.extend(area);
+    world.plugins.extend(area_plugin);
+    world.timings.create += t2.elapsed();
+    Ok(())
 }
 
 /// The environment light's index: at most one light may surround the scene,
