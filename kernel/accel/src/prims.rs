@@ -186,6 +186,24 @@ impl Tri4 {
         [0, 1, 2].map(|k| [v[k][0][lane], v[k][1][lane], v[k][2][lane]])
     }
 
+    /// Whether triangle `lane` lies in an axis-aligned plane (its three
+    /// vertices share one coordinate exactly) that `o` lies in too. A ray
+    /// from such an origin meets that plane only at t = 0 (or, lying in it,
+    /// never: its determinant is 0), so the triangle is a miss for any ray
+    /// whose `t_min` is not negative — exactly what the scalar test's f64
+    /// recheck concludes, found without it. Why it matters: a hit on a wall
+    /// of a box has an exact coordinate across the wall (its error bound is
+    /// 0 there), so every ray spawned from a box's wall starts in the wall's
+    /// plane, and its two triangles would each take the scalar test.
+    #[inline(always)]
+    fn origin_in_axis_plane(&self, lane: usize, o: [f32; 3]) -> bool {
+        let v = &self.v;
+        (0..3).any(|k| {
+            let a = v[0][k][lane];
+            a == o[k] && v[1][k][lane] == a && v[2][k][lane] == a
+        })
+    }
+
     /// The 4-wide watertight test over `(t_min, t_max)`: per lane, the
     /// scalar test's operations in the same order ([`intersect_triangle_sheared`]),
     /// so a lane it decides gets the scalar test's `t` and barycentrics bit
@@ -935,6 +953,17 @@ impl Primitives {
             mask &= mask - 1;
             let r = block.refs[lane];
             if l.slow >> lane & 1 == 1 {
+                if q.ray.t_min >= 0.0 && block.origin_in_axis_plane(lane, q.ray.origin.to_array()) {
+                    debug_assert!(rtk_geom::intersect_triangle(
+                        q.ray.origin.to_array(),
+                        q.ray.dir.to_array(),
+                        block.tri(lane),
+                        q.ray.t_min,
+                        q.ray.t_max
+                    )
+                    .is_none());
+                    continue;
+                }
                 let d = q.ray.dir.to_array();
                 self.triangle(q, d, r, block.tri(lane), hit, level);
             } else if l.t[lane] < q.limit(r.key()) {
@@ -1010,10 +1039,22 @@ impl Primitives {
             return true;
         }
         let d = ray.dir.to_array();
+        let o = ray.origin.to_array();
         let mut mask = l.slow & valid;
         while mask != 0 {
             let lane = mask.trailing_zeros() as usize;
             mask &= mask - 1;
+            if ray.t_min >= 0.0 && block.origin_in_axis_plane(lane, o) {
+                debug_assert!(rtk_geom::intersect_triangle(
+                    o,
+                    d,
+                    block.tri(lane),
+                    ray.t_min,
+                    ray.t_max
+                )
+                .is_none());
+                continue;
+            }
             let t = block.tri(lane);
             if intersect_triangle_sheared(&pre.shear, d, t, ray.t_min, ray.t_max).is_some() {
                 return true;

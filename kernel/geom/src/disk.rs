@@ -51,7 +51,7 @@ impl<R: Real> Disk<R> {
     ///
     /// `t = n·(c − o) / n·d`. The numerator is the signed distance of the
     /// origin from the plane (|n| = 1); when its magnitude is within
-    /// [`Disk::origin_band`], the origin lies on the plane as far as f32 can
+    /// its origin band (`origin_band`), the origin lies on the plane as far as f32 can
     /// tell, and the hit is refused (no self-hit). The
     /// radial test uses `q = t d − (c − o)` projected into the plane, and is
     /// closed at both radii: a disk of radius r and an annulus of inner
