@@ -170,7 +170,8 @@ pub fn abi_v2_dir() -> &'static Path {
     DIR.get_or_init(|| other_kernel_plugin("abiv2", Some("2.0.0"), &[]))
 }
 
-/// A plugin built against a kernel whose `rtk-abi` is 3.1.0 (a later minor)
+/// A plugin built against a kernel whose `rtk-abi` is one minor later than
+/// this host's (entries appended)
 /// and whose BVH differs (`rtk-accel` at 0.9.0, with another culling
 /// margin): it loads, since only the ABI crate's major version counts.
 pub fn later_minor_dir() -> &'static Path {
@@ -178,7 +179,7 @@ pub fn later_minor_dir() -> &'static Path {
     DIR.get_or_init(|| {
         other_kernel_plugin(
             "laterminor",
-            Some("3.1.0"),
+            Some(&later_minor_version()),
             &[
                 (
                     "accel/Cargo.toml",
@@ -189,6 +190,15 @@ pub fn later_minor_dir() -> &'static Path {
             ],
         )
     })
+}
+
+/// This host's `rtk-abi` version with the minor one later and patch 0.
+fn later_minor_version() -> String {
+    format!(
+        "{}.{}.0",
+        rtk_kernel::abi::ABI_VERSION,
+        rtk_kernel::abi::ABI_MINOR + 1
+    )
 }
 
 /// Build the panicky fixture as class `class` against a copy of `kernel/`
@@ -205,7 +215,7 @@ fn other_kernel_plugin(class: &str, abi_version: Option<&str>, edits: &[KernelEd
     if let Some(v) = abi_version {
         edit_file(
             &src.join("kernel/abi/Cargo.toml"),
-            "version = \"3.0.0\"",
+            &format!("version = \"{}\"", rtk_kernel::abi::ABI_CRATE_VERSION),
             &format!("version = \"{v}\""),
         );
     }

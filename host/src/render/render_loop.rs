@@ -13,6 +13,7 @@
 use crate::render::tracer::Tracer;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rtk_kernel::abi::*;
+use rtk_kernel::sdk::batch;
 use rtk_shell::desc::render::Filter;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
@@ -546,17 +547,8 @@ impl Job<'_, '_> {
                 }
             }
         }
-        let mut taken = 0u64;
+        let taken = self.sample_tile(&mut ctx, &tr, &mut px, target);
         let tw = tr.width() as usize;
-        for (i, (sum, count)) in px.iter_mut().enumerate() {
-            let (x, y) = (tr.x0 + (i % tw) as u32, tr.y0 + (i / tw) as u32);
-            let before = *count;
-            let go_on = self.pixel(&mut ctx, x, y, sum, count, target);
-            taken += (*count - before) as u64;
-            if !go_on {
-                break;
-            }
-        }
         counter.store(ctx.query_counter(), Ordering::Relaxed);
         if let Ok(mut f) = film.lock() {
             for (i, (sum, count)) in px.into_iter().enumerate() {
@@ -570,42 +562,111 @@ impl Job<'_, '_> {
         taken
     }
 
-    /// Add the pixel's samples `count..target` to its running `sum`, in
-    /// sample order; false once the render must stop (the samples taken so
-    /// far are counted).
-    fn pixel(
+    /// Bring the tile's pixels (`px`: their running sums and counts, in
+    /// the tile's order) up to `target` samples; returns the samples taken.
+    ///
+    /// The camera rays of up to [`batch::MAX`] pixel samples are traced
+    /// together (the integrator's `li_batch`: ray streams), each with its
+    /// own random stream, so a sample's value does not depend on the
+    /// samples it is batched with; each pixel adds its samples in sample
+    /// order. Stops early (the samples traced so far counted) on a failure
+    /// or an interrupt.
+    fn sample_tile(
+        &self,
+        ctx: &mut TraceCtx,
+        tr: &Rect,
+        px: &mut [([f64; 3], u32)],
+        target: u32,
+    ) -> u64 {
+        let mut b = CameraBatch::new();
+        let mut taken = 0u64;
+        let tw = tr.width() as usize;
+        for i in 0..px.len() {
+            let (x, y) = (tr.x0 + (i % tw) as u32, tr.y0 + (i / tw) as u32);
+            let pixel = y as u64 * self.width as u64 + x as u64;
+            for s in px[i].1..target {
+                if self.interrupt.is_some_and(|s| s.load(Ordering::Relaxed)) {
+                    return taken + self.flush(ctx, &mut b, px).unwrap_or(0);
+                }
+                if !self.camera_sample(ctx, x, y, pixel, s, i, &mut b, px) {
+                    return taken;
+                }
+                if b.len == batch::MAX {
+                    match self.flush(ctx, &mut b, px) {
+                        Some(n) => taken += n,
+                        None => return taken,
+                    }
+                }
+            }
+        }
+        taken + self.flush(ctx, &mut b, px).unwrap_or(0)
+    }
+
+    /// Pixel sample `s` of pixel `i` of the tile (at `x`, `y`): its camera
+    /// ray joins the batch, or (no ray) the sample counts as black at once.
+    /// False once the render must stop (the camera failed).
+    #[allow(clippy::too_many_arguments)]
+    fn camera_sample(
         &self,
         ctx: &mut TraceCtx,
         x: u32,
         y: u32,
-        sum: &mut [f64; 3],
-        count: &mut u32,
-        target: u32,
+        pixel: u64,
+        s: u32,
+        i: usize,
+        b: &mut CameraBatch,
+        px: &mut [([f64; 3], u32)],
     ) -> bool {
-        let world = self.tracer.world();
-        let pixel = y as u64 * self.width as u64 + x as u64;
-        while *count < target {
-            if self.interrupt.is_some_and(|s| s.load(Ordering::Relaxed)) {
-                return false;
+        ctx.rng = RngState::for_sample(self.seed, pixel, s as u64);
+        let (jx, jy) = film_offset(self.filter, s, self.spp, self.stratified, &mut ctx.rng);
+        let sample = CameraSample {
+            film: [
+                (x as f32 + jx) / self.width as f32,
+                (y as f32 + jy) / self.height as f32,
+            ],
+            lens: [ctx.rng.next_f32(), ctx.rng.next_f32()],
+            time: self.shutter[0] + (self.shutter[1] - self.shutter[0]) * ctx.rng.next_f32(),
+        };
+        match self.tracer.world().camera.generate_ray(ctx, &sample) {
+            Some(c) if !ctx.failed() => {
+                b.push(c.ray, ctx.rng, i, c.weight);
+                true
             }
-            let s = *count;
-            ctx.rng = RngState::for_sample(self.seed, pixel, s as u64);
-            let (jx, jy) = film_offset(self.filter, s, self.spp, self.stratified, &mut ctx.rng);
-            let sample = CameraSample {
-                film: [
-                    (x as f32 + jx) / self.width as f32,
-                    (y as f32 + jy) / self.height as f32,
-                ],
-                lens: [ctx.rng.next_f32(), ctx.rng.next_f32()],
-                time: self.shutter[0] + (self.shutter[1] - self.shutter[0]) * ctx.rng.next_f32(),
-            };
-            let l = match world.camera.generate_ray(ctx, &sample) {
-                Some(c) if !ctx.failed() => self.tracer.camera_li(ctx, &c.ray).scale(c.weight),
-                _ => Color::BLACK,
-            };
-            if self.failure.check(ctx) {
-                return false;
+            _ => {
+                if self.failure.check(ctx) {
+                    return false;
+                }
+                // No ray: a black sample (adding 0 to the sum is exact, so
+                // its place among the pixel's samples does not matter).
+                px[i].1 += 1;
+                true
             }
+        }
+    }
+
+    /// Trace the batch and add each sample to its pixel, in batch order
+    /// (each pixel's samples are in sample order there); the samples
+    /// added, or `None` when a plugin failed.
+    fn flush(
+        &self,
+        ctx: &mut TraceCtx,
+        b: &mut CameraBatch,
+        px: &mut [([f64; 3], u32)],
+    ) -> Option<u64> {
+        let n = b.len;
+        if n == 0 {
+            return Some(0);
+        }
+        self.tracer
+            .camera_li_batch(ctx, &b.rays[..n], &mut b.rngs[..n], &mut b.out[..n]);
+        b.len = 0;
+        if self.failure.check(ctx) {
+            return None;
+        }
+        for k in 0..n {
+            let (i, w) = b.slots[k];
+            let l = b.out[k].scale(w);
+            let (sum, count) = &mut px[i];
             if l.is_finite() {
                 sum[0] += l.r as f64;
                 sum[1] += l.g as f64;
@@ -615,7 +676,36 @@ impl Job<'_, '_> {
             }
             *count += 1;
         }
-        true
+        Some(n as u64)
+    }
+}
+
+/// Camera rays waiting to be traced together: each with its random stream
+/// (after the camera's draws), the tile pixel it belongs to and its weight.
+struct CameraBatch {
+    rays: [Ray; batch::MAX],
+    rngs: [RngState; batch::MAX],
+    slots: [(usize, f32); batch::MAX],
+    out: [Color; batch::MAX],
+    len: usize,
+}
+
+impl CameraBatch {
+    fn new() -> Self {
+        CameraBatch {
+            rays: [Ray::new(Default::default(), Default::default()); batch::MAX],
+            rngs: [RngState::default(); batch::MAX],
+            slots: [(0, 0.0); batch::MAX],
+            out: [Color::BLACK; batch::MAX],
+            len: 0,
+        }
+    }
+
+    fn push(&mut self, ray: Ray, rng: RngState, pixel: usize, weight: f32) {
+        self.rays[self.len] = ray;
+        self.rngs[self.len] = rng;
+        self.slots[self.len] = (pixel, weight);
+        self.len += 1;
     }
 }
 

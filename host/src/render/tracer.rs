@@ -41,6 +41,31 @@ impl<'w> Tracer<'w> {
         count(ctx, ray_kind::CAMERA);
         self.world.integrator.radiance(ctx, &self.scene(), ray)
     }
+
+    /// Radiance along each of a batch of camera rays (each counted as a
+    /// camera ray), `rngs[i]` being ray `i`'s random stream.
+    pub fn camera_li_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        rngs: &mut [RngState],
+        out: &mut [Color],
+    ) {
+        ctx.stats.rays[ray_kind::CAMERA as usize] += rays.len() as u64;
+        self.world
+            .integrator
+            .radiance_batch(ctx, &self.scene(), rays, rngs, out)
+    }
+}
+
+/// Count the active rays of a batch as rays of `kind`.
+#[inline]
+fn count_batch(ctx: &mut TraceCtx, kind: u32, active: u64, n: usize) {
+    if kind != ray_kind::TRACED {
+        if let Some(c) = ctx.stats.rays.get_mut(kind as usize) {
+            *c += (active & rtk_kernel::sdk::batch::all(n)).count_ones() as u64;
+        }
+    }
 }
 
 #[inline]
@@ -131,6 +156,46 @@ impl Services for Tracer<'_> {
             .lights
             .get(index as usize)?
             .sample_li(ctx, p, u, time)
+    }
+
+    fn intersect_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        kind: u32,
+        hits: &mut [Hit],
+        active: u64,
+    ) -> u64 {
+        count_batch(ctx, kind, active, rays.len());
+        self.world.root.intersect_stream(ctx, rays, hits, active)
+    }
+
+    fn occluded_batch(&self, ctx: &mut TraceCtx, rays: &[Ray], active: u64) -> u64 {
+        count_batch(ctx, ray_kind::SHADOW, active, rays.len());
+        self.world.root.occluded_stream(ctx, rays, active)
+    }
+
+    fn local_geom_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &[Hit],
+        active: u64,
+        mask: u32,
+        out: &mut [LocalGeom],
+    ) {
+        let n = (active & rtk_kernel::sdk::batch::all(rays.len())).count_ones() as u64;
+        ctx.stats.local_geom_calls += n;
+        for (bit, c) in ctx.stats.local_geom_fields.iter_mut().enumerate() {
+            *c += ((mask >> bit) & 1) as u64 * n;
+        }
+        self.world
+            .root
+            .local_geom_stream(ctx, rays, hits, active, mask, out);
+        let m = rays.len().min(hits.len()).min(out.len());
+        for i in rtk_kernel::sdk::batch::lanes(active, m) {
+            self.world.root_inst.bind(&mut out[i]);
+        }
     }
 
     fn material(&self, shader: u32) -> Option<ShaderRef> {

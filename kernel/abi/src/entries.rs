@@ -153,7 +153,21 @@ macro_rules! object_entries {
                 /// set to it as is, not wrapped in its own structure.
                 FlattensPrimitives flattens_primitives;
             }
-            appended {}
+            appended {
+                /// Ray streams (ABI 3.1). Nearest hits of a batch of at most
+                /// 64 rays: ray `i` is asked, as `intersect` would ask it,
+                /// when bit `i` of `active` is set, its hit written to
+                /// `hits[i]`; returns the mask of the rays that hit. The
+                /// answers are `intersect`'s, bit for bit; an aggregate may
+                /// find them together (packets).
+                hot intersect_batch(const, (rays: Span<Ray>), (hits: SpanMut<Hit>), (active: u64), (level: u32)) -> plain [u64] = 0;
+                /// Any hit for each active ray of a batch (shadow rays);
+                /// returns the mask of the rays occluded.
+                hot occluded_batch(const, (rays: Span<Ray>), (active: u64), (level: u32)) -> plain [u64] = 0;
+                /// Local geometry of each active hit of a batch, as
+                /// `local_geom` would give it, into `out[i]`.
+                hot local_geom_batch(const, (rays: Span<Ray>), (hits: Span<Hit>), (active: u64), (level: u32), (mask: u32), (out: SpanMut<LocalGeom>)) -> unit [];
+            }
             appended_caps {}
         }
     };
@@ -213,7 +227,14 @@ macro_rules! integrator_entries {
             }
             caps {}
             flags {}
-            appended {}
+            appended {
+                /// Ray streams (ABI 3.1). The radiance along each of a batch
+                /// of camera rays, `rngs[i]` being ray `i`'s random stream
+                /// (what `li` would draw from the context's), into `out[i]`:
+                /// the answers are `li`'s, bit for bit, however the paths are
+                /// advanced (together, regrouped at every bounce).
+                hot li_batch(const, (scene: *const SceneRef), (rays: Span<Ray>), (rngs: SpanMut<RngState>), (out: SpanMut<Color>)) -> unit [];
+            }
             appended_caps {}
         }
     };
@@ -275,7 +296,12 @@ macro_rules! light_entries {
                 }
             }
             flags {}
-            appended {}
+            appended {
+                /// Ray streams (ABI 3.1). `sample_li` for each active point
+                /// of a batch (at most 64), into `out[i]`; returns the mask
+                /// of the points that got a sample.
+                hot sample_li_batch(const, (p: Span<Float3>), (u: Span<[f32; 2]>), (time: Span<f32>), (active: u64), (out: SpanMut<LightSample>)) -> plain [u64] = 0;
+            }
             appended_caps {}
         }
     };
@@ -321,7 +347,21 @@ macro_rules! scene_entries {
             }
             caps {}
             flags {}
-            appended {}
+            appended {
+                /// Ray streams (ABI 3.1). Nearest hits of the root for a
+                /// batch of at most 64 rays (bit `i` of `active`: ray `i`
+                /// asked); returns the mask of those that hit.
+                hot intersect_batch(const, (rays: Span<Ray>), (kind: u32), (hits: SpanMut<Hit>), (active: u64)) -> plain [u64] = 0;
+                /// Any hit of the root for each active shadow ray of a
+                /// batch; returns the mask of those occluded.
+                hot occluded_batch(const, (rays: Span<Ray>), (active: u64)) -> plain [u64] = 0;
+                /// Local geometry of each active root hit of a batch.
+                hot local_geom_batch(const, (rays: Span<Ray>), (hits: Span<Hit>), (active: u64), (mask: u32), (out: SpanMut<LocalGeom>)) -> unit [];
+                /// `sample_light` for each active point of a batch: light
+                /// `index[i]` from `p[i]`, into `out[i]`; returns the mask of
+                /// the points that got a sample.
+                hot sample_light_batch(const, (index: Span<u32>), (p: Span<Float3>), (u: Span<[f32; 2]>), (time: Span<f32>), (active: u64), (out: SpanMut<LightSample>)) -> plain [u64] = 0;
+            }
             appended_caps {}
         }
     };

@@ -237,6 +237,69 @@ impl Object {
         self.inner.live.local_geom(ctx, ray, hit, 0, mask, out)
     }
 
+    /// Nearest hits of a batch of rays from level 0 (ray streams), ray by
+    /// ray when the class predates the entry; the mask of those that hit.
+    #[inline]
+    pub fn intersect_stream(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        active: u64,
+    ) -> u64 {
+        let live = &self.inner.live;
+        if live.raw_class().intersect_batch().is_some() {
+            return live
+                .intersect_batch(ctx, rays, hits, active, 0)
+                .unwrap_or(0);
+        }
+        let mut found = 0;
+        for i in rtk_sdk::batch::lanes(active, rays.len().min(hits.len())) {
+            if live.intersect(ctx, &rays[i], &mut hits[i], 0) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Any hit for each active ray of a batch, from level 0.
+    #[inline]
+    pub fn occluded_stream(&self, ctx: &mut TraceCtx, rays: &[Ray], active: u64) -> u64 {
+        let live = &self.inner.live;
+        if let Some(m) = live.occluded_batch(ctx, rays, active, 0) {
+            return m;
+        }
+        let mut found = 0;
+        for i in rtk_sdk::batch::lanes(active, rays.len()) {
+            if live.occluded(ctx, &rays[i], 0) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Local geometry of each active hit of a batch found from level 0.
+    #[inline]
+    pub fn local_geom_stream(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &[Hit],
+        active: u64,
+        mask: u32,
+        out: &mut [LocalGeom],
+    ) {
+        let live = &self.inner.live;
+        if live
+            .local_geom_batch(ctx, rays, hits, active, 0, mask, out)
+            .is_none()
+        {
+            for i in rtk_sdk::batch::lanes(active, rays.len().min(hits.len()).min(out.len())) {
+                live.local_geom(ctx, &rays[i], &hits[i], 0, mask, &mut out[i]);
+            }
+        }
+    }
+
     /// A copy of the triangles the object lends as data (positions, index
     /// triples; `None` when its class lends none), checked: every index is
     /// within the positions.
@@ -514,6 +577,32 @@ impl Integrator {
     #[inline]
     pub fn radiance(&self, ctx: &mut TraceCtx, scene: &SceneRecord, ray: &Ray) -> Color {
         self.inner.live.li(ctx, scene.scene(), ray)
+    }
+
+    /// Radiance along each of a batch of camera rays, `rngs[i]` being ray
+    /// `i`'s random stream (ray streams): the integrator's `li_batch`, or
+    /// `li` ray by ray with each stream in the context when its plugin
+    /// predates the entry. The answers are the same either way.
+    pub fn radiance_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        scene: &SceneRecord,
+        rays: &[Ray],
+        rngs: &mut [RngState],
+        out: &mut [Color],
+    ) {
+        let live = &self.inner.live;
+        if live.raw_class().li_batch().is_some() {
+            live.li_batch(ctx, scene.scene(), rays, rngs, out);
+            return;
+        }
+        let saved = ctx.rng;
+        for ((ray, rng), o) in rays.iter().zip(rngs.iter_mut()).zip(out.iter_mut()) {
+            ctx.rng = *rng;
+            *o = live.li(ctx, scene.scene(), ray);
+            *rng = ctx.rng;
+        }
+        ctx.rng = saved;
     }
 }
 

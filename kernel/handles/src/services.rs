@@ -107,6 +107,82 @@ pub trait Services: Sync + Sized {
     fn light_pdf(&self, ctx: &mut TraceCtx, p: Vec3, ray: &Ray, geom: Option<&LocalGeom>) -> f32;
     /// The shader with id `shader`, as the record a plugin queries.
     fn material(&self, shader: u32) -> Option<ShaderRef>;
+
+    /// Nearest hits of the root for a batch of rays (ray streams); the
+    /// default asks [`intersect`](Services::intersect) ray by ray.
+    fn intersect_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        kind: u32,
+        hits: &mut [Hit],
+        active: u64,
+    ) -> u64 {
+        let mut found = 0;
+        for i in rtk_sdk::batch::lanes(active, rays.len().min(hits.len())) {
+            if self.intersect(ctx, &rays[i], kind, &mut hits[i]) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Any hit of the root for each active ray of a batch; the default
+    /// asks [`occluded`](Services::occluded) ray by ray.
+    fn occluded_batch(&self, ctx: &mut TraceCtx, rays: &[Ray], active: u64) -> u64 {
+        let mut found = 0;
+        for i in rtk_sdk::batch::lanes(active, rays.len()) {
+            if self.occluded(ctx, &rays[i]) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Local geometry of each active root hit of a batch; the default asks
+    /// [`local_geom`](Services::local_geom) hit by hit.
+    fn local_geom_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &[Hit],
+        active: u64,
+        mask: u32,
+        out: &mut [LocalGeom],
+    ) {
+        for i in rtk_sdk::batch::lanes(active, rays.len().min(hits.len()).min(out.len())) {
+            self.local_geom(ctx, &rays[i], &hits[i], mask, &mut out[i]);
+        }
+    }
+
+    /// `sample_light` for each active point of a batch; the default asks
+    /// point by point.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_light_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        index: &[u32],
+        p: &[Float3],
+        u: &[[f32; 2]],
+        time: &[f32],
+        active: u64,
+        out: &mut [LightSample],
+    ) -> u64 {
+        let n = index
+            .len()
+            .min(p.len())
+            .min(u.len())
+            .min(time.len())
+            .min(out.len());
+        let mut got = 0;
+        for i in rtk_sdk::batch::lanes(active, n) {
+            if let Some(s) = self.sample_light(ctx, index[i], p[i].v(), u[i], time[i]) {
+                out[i] = s;
+                got |= 1 << i;
+            }
+        }
+        got
+    }
 }
 
 rtk_abi::scene_entries!(rtk_sdk::__host_shims, shims);

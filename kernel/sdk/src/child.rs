@@ -68,6 +68,85 @@ impl Child {
         self.inst.bind(out);
     }
 
+    /// Nearest hits of a batch of rays through the child (ray streams,
+    /// [`Object::intersect_batch`](crate::Object::intersect_batch)), ray by
+    /// ray when its class predates the entry; the mask of those that hit.
+    #[inline]
+    pub fn intersect_stream(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        active: u64,
+        level: u32,
+    ) -> u64 {
+        if self.live.raw_class().intersect_batch().is_some() {
+            return self
+                .live
+                .intersect_batch(ctx, rays, hits, active, level)
+                .unwrap_or(0);
+        }
+        let mut found = 0;
+        for i in crate::batch::lanes(active, rays.len().min(hits.len())) {
+            if self.live.intersect(ctx, &rays[i], &mut hits[i], level) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Any hit for each active ray of a batch (ray by ray when the class
+    /// predates the entry); the mask of those occluded.
+    #[inline]
+    pub fn occluded_stream(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        active: u64,
+        level: u32,
+    ) -> u64 {
+        if let Some(m) = self.live.occluded_batch(ctx, rays, active, level) {
+            return m;
+        }
+        let mut found = 0;
+        for i in crate::batch::lanes(active, rays.len()) {
+            if self.live.occluded(ctx, &rays[i], level) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Local geometry of each active hit of a batch, with this instance's
+    /// bindings applied as [`Child::local_geom`] applies them.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub fn local_geom_stream(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &[Hit],
+        active: u64,
+        level: u32,
+        mask: u32,
+        out: &mut [LocalGeom],
+    ) {
+        let n = rays.len().min(hits.len()).min(out.len());
+        if self
+            .live
+            .local_geom_batch(ctx, rays, hits, active, level, mask, out)
+            .is_none()
+        {
+            for i in crate::batch::lanes(active, n) {
+                self.live
+                    .local_geom(ctx, &rays[i], &hits[i], level, mask, &mut out[i]);
+            }
+        }
+        for i in crate::batch::lanes(active, n) {
+            self.inst.bind(&mut out[i]);
+        }
+    }
+
     /// Box over `[time0, time1]`; an error names the child's class.
     pub fn bounds(&self, time0: f32, time1: f32) -> Result<Bounds3, PluginError> {
         Ok(self.live.bounds(time0, time1)?)

@@ -546,6 +546,16 @@ macro_rules! __caller {
             Some(unsafe { f(self.raw_this(), ctx $(, $crate::__to_raw!($a : $($t)*))*) })
         }
     };
+    (opt [$($d:tt)*] hot $name:ident ( const $(, ($a:ident : $($t:tt)*))* ) -> unit []) => {
+        $($d)*
+        #[inline]
+        pub fn $name(&self, ctx: &mut $crate::abi::TraceCtx $(, $a: $crate::__safe_ty!($($t)*))*) -> Option<()> {
+            let f = self.raw_class().$name()?;
+            // SAFETY: as for every call through a live handle.
+            unsafe { f(self.raw_this(), ctx $(, $crate::__to_raw!($a : $($t)*))*) };
+            Some(())
+        }
+    };
     (opt [$($d:tt)*] hot $name:ident ( const $(, ($a:ident : $($t:tt)*))* ) -> option [$($ret:tt)*]) => {
         $($d)*
         #[inline]

@@ -45,6 +45,7 @@
 #![deny(clippy::missing_safety_doc)]
 
 pub mod analytic;
+pub mod batch;
 pub mod camera;
 mod child;
 mod conv;
@@ -312,6 +313,58 @@ pub trait Object: Plugin {
         let _ = (ctx, p, time);
         Interior::NONE
     }
+
+    /// Nearest hits of a batch of rays (ray streams): ray `i` when bit `i`
+    /// of `active` is set, into `hits[i]`; the mask of those that hit. The
+    /// default asks [`intersect`](Object::intersect) ray by ray; an
+    /// aggregate that finds them together (packets) must give the same
+    /// answers, bit for bit (`rtk conform` checks it).
+    fn intersect_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &mut [Hit],
+        active: u64,
+        level: u32,
+    ) -> u64 {
+        let mut found = 0;
+        for i in batch::lanes(active, rays.len().min(hits.len())) {
+            if self.intersect(ctx, &rays[i], &mut hits[i], level) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Any hit for each active ray of a batch; the mask of those occluded.
+    /// The default asks [`occluded`](Object::occluded) ray by ray.
+    fn occluded_batch(&self, ctx: &mut TraceCtx, rays: &[Ray], active: u64, level: u32) -> u64 {
+        let mut found = 0;
+        for i in batch::lanes(active, rays.len()) {
+            if self.occluded(ctx, &rays[i], level) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Local geometry of each active hit of a batch, into `out[i]`. The
+    /// default asks [`local_geom`](Object::local_geom) hit by hit.
+    #[allow(clippy::too_many_arguments)]
+    fn local_geom_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &[Hit],
+        active: u64,
+        level: u32,
+        mask: u32,
+        out: &mut [LocalGeom],
+    ) {
+        for i in batch::lanes(active, rays.len().min(hits.len()).min(out.len())) {
+            self.local_geom(ctx, &rays[i], &hits[i], level, mask, &mut out[i]);
+        }
+    }
 }
 
 /// Capability: the primitive-set protocol. An aggregate over this object may
@@ -528,6 +581,29 @@ pub trait Shade: Shader {
 pub trait Integrator: Plugin {
     /// Radiance arriving along `-ray.dir` at `ray.origin`.
     fn li(&self, ctx: &mut TraceCtx, scene: &Scene, ray: &Ray) -> Color;
+
+    /// The radiance along each of a batch of camera rays (ray streams),
+    /// `rngs[i]` being ray `i`'s random stream, into `out[i]`. The default
+    /// runs [`li`](Integrator::li) ray by ray with each stream in the
+    /// context; an integrator that advances the paths together must give
+    /// the same answers, bit for bit, drawing each path's numbers from its
+    /// own stream in the order `li` would.
+    fn li_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        scene: &Scene,
+        rays: &[Ray],
+        rngs: &mut [RngState],
+        out: &mut [Color],
+    ) {
+        let saved = ctx.rng;
+        for ((ray, rng), o) in rays.iter().zip(rngs.iter_mut()).zip(out.iter_mut()) {
+            ctx.rng = *rng;
+            *o = self.li(ctx, scene, ray);
+            *rng = ctx.rng;
+        }
+        ctx.rng = saved;
+    }
 }
 
 /// A camera.
@@ -547,6 +623,29 @@ pub trait Light: Plugin {
         u: [f32; 2],
         time: f32,
     ) -> Option<LightSample>;
+
+    /// [`sample_li`](Light::sample_li) for each active point of a batch,
+    /// into `out[i]`; the mask of the points that got a sample. The default
+    /// asks point by point.
+    fn sample_li_batch(
+        &self,
+        ctx: &mut TraceCtx,
+        p: &[Float3],
+        u: &[[f32; 2]],
+        time: &[f32],
+        active: u64,
+        out: &mut [LightSample],
+    ) -> u64 {
+        let n = p.len().min(u.len()).min(time.len()).min(out.len());
+        let mut got = 0;
+        for i in batch::lanes(active, n) {
+            if let Some(s) = self.sample_li(ctx, p[i].v(), u[i], time[i]) {
+                out[i] = s;
+                got |= 1 << i;
+            }
+        }
+        got
+    }
 }
 
 /// Capability: the light surrounds the scene, so rays that leave it find

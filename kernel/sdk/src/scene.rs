@@ -48,6 +48,112 @@ impl Scene {
         g
     }
 
+    /// Nearest hits of the root for a batch of rays (ray streams): ray `i`
+    /// when bit `i` of `active` is set, into `hits[i]`; the mask of those
+    /// that hit. Ray by ray on a host that predates the entry.
+    #[inline]
+    pub fn intersect_stream(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        kind: u32,
+        hits: &mut [Hit],
+        active: u64,
+    ) -> u64 {
+        if self.live.raw_class().intersect_batch().is_some() {
+            return self
+                .live
+                .intersect_batch(ctx, rays, kind, hits, active)
+                .unwrap_or(0);
+        }
+        let mut found = 0;
+        for i in crate::batch::lanes(active, rays.len().min(hits.len())) {
+            if self.live.intersect(ctx, &rays[i], kind, &mut hits[i]) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Any hit of the root for each active shadow ray of a batch; the mask
+    /// of those occluded.
+    #[inline]
+    pub fn occluded_stream(&self, ctx: &mut TraceCtx, rays: &[Ray], active: u64) -> u64 {
+        if let Some(m) = self.live.occluded_batch(ctx, rays, active) {
+            return m;
+        }
+        let mut found = 0;
+        for i in crate::batch::lanes(active, rays.len()) {
+            if self.live.occluded(ctx, &rays[i]) {
+                found |= 1 << i;
+            }
+        }
+        found
+    }
+
+    /// Local geometry of each active root hit of a batch, into `out[i]`
+    /// (each starting as [`LocalGeom::EMPTY`]).
+    #[inline]
+    pub fn local_geom_stream(
+        &self,
+        ctx: &mut TraceCtx,
+        rays: &[Ray],
+        hits: &[Hit],
+        active: u64,
+        mask: u32,
+        out: &mut [LocalGeom],
+    ) {
+        let n = rays.len().min(hits.len()).min(out.len());
+        for i in crate::batch::lanes(active, n) {
+            out[i] = LocalGeom::EMPTY;
+        }
+        if self
+            .live
+            .local_geom_batch(ctx, rays, hits, active, mask, out)
+            .is_none()
+        {
+            for i in crate::batch::lanes(active, n) {
+                self.live
+                    .local_geom(ctx, &rays[i], &hits[i], mask, &mut out[i]);
+            }
+        }
+    }
+
+    /// Light `index[i]` sampled from `p[i]` for each active point of a
+    /// batch, into `out[i]`; the mask of the points that got a sample.
+    #[inline]
+    pub fn sample_light_stream(
+        &self,
+        ctx: &mut TraceCtx,
+        index: &[u32],
+        p: &[Float3],
+        u: &[[f32; 2]],
+        time: &[f32],
+        active: u64,
+        out: &mut [LightSample],
+    ) -> u64 {
+        if let Some(m) = self
+            .live
+            .sample_light_batch(ctx, index, p, u, time, active, out)
+        {
+            return m;
+        }
+        let n = index
+            .len()
+            .min(p.len())
+            .min(u.len())
+            .min(time.len())
+            .min(out.len());
+        let mut got = 0;
+        for i in crate::batch::lanes(active, n) {
+            if let Some(s) = self.live.sample_light(ctx, index[i], p[i], u[i], time[i]) {
+                out[i] = s;
+                got |= 1 << i;
+            }
+        }
+        got
+    }
+
     /// The material bound at `geom` (`None` when no shader is bound).
     #[inline]
     pub fn material(&self, geom: &LocalGeom) -> Option<Material<'_>> {
