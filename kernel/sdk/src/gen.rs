@@ -540,6 +540,8 @@ macro_rules! __caller {
     (opt [$($d:tt)*] hot $name:ident ( const $(, ($a:ident : $($t:tt)*))* ) -> plain [$($ret:tt)*]) => {
         $($d)*
         #[inline]
+        // The caller takes the entry's arguments one for one.
+        #[allow(clippy::too_many_arguments)]
         pub fn $name(&self, ctx: &mut $crate::abi::TraceCtx $(, $a: $crate::__safe_ty!($($t)*))*) -> Option<$($ret)*> {
             let f = self.raw_class().$name()?;
             // SAFETY: as for every call through a live handle.
@@ -549,6 +551,8 @@ macro_rules! __caller {
     (opt [$($d:tt)*] hot $name:ident ( const $(, ($a:ident : $($t:tt)*))* ) -> unit []) => {
         $($d)*
         #[inline]
+        // The caller takes the entry's arguments one for one.
+        #[allow(clippy::too_many_arguments)]
         pub fn $name(&self, ctx: &mut $crate::abi::TraceCtx $(, $a: $crate::__safe_ty!($($t)*))*) -> Option<()> {
             let f = self.raw_class().$name()?;
             // SAFETY: as for every call through a live handle.

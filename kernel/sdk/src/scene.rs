@@ -122,6 +122,7 @@ impl Scene {
     /// Light `index[i]` sampled from `p[i]` for each active point of a
     /// batch, into `out[i]`; the mask of the points that got a sample.
     #[inline]
+    #[allow(clippy::too_many_arguments)] // the entry's spans, one for one
     pub fn sample_light_stream(
         &self,
         ctx: &mut TraceCtx,
