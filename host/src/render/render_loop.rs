@@ -19,6 +19,8 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
+mod chunked;
+
 /// Edge of a square tile, in pixels.
 pub const TILE: u32 = 16;
 
@@ -198,7 +200,8 @@ pub enum End {
 pub struct Control<'a> {
     /// Show a progress bar (after a second).
     pub progress: bool,
-    /// Samples per pixel a pass adds (at least 1).
+    /// Samples per pixel a pass adds (at least 1; more for an image of a
+    /// tile or fewer per thread, so a pass has samples for every thread).
     pub pass_spp: u32,
     /// Set (by the Ctrl-C handler) to stop: polled before every sample.
     pub stop: Option<&'a AtomicBool>,
@@ -372,7 +375,13 @@ pub fn render_passes(
         .map(|&c| r.spp.saturating_sub(c) as u64)
         .sum();
     let progress = Progress::new(todo, ctl.progress);
-    let pass = ctl.pass_spp.max(1);
+    let pass = if (n_tiles as usize) <= pool.current_num_threads() {
+        // A tile or fewer per thread: a pass of a few samples would cost
+        // more in starting it than in sampling, and leave threads idle.
+        (ctl.pass_spp.max(1)).max(chunked::MIN_PASS.div_ceil(rect.len()) as u32)
+    } else {
+        ctl.pass_spp.max(1)
+    };
     let end = loop {
         let (min, _) = accum.sample_range();
         if min >= r.spp {
@@ -494,6 +503,16 @@ impl<'a, 'w> Job<'a, 'w> {
         progress: &Progress,
     ) {
         let shared = Mutex::new(accum);
+        if (n_tiles as usize) < pool.current_num_threads() {
+            // Fewer tiles than threads: each tile's samples on every thread.
+            for t in 0..n_tiles {
+                if self.stopped() {
+                    return;
+                }
+                progress.add(self.tile_chunked(pool, &shared, t, target));
+            }
+            return;
+        }
         pool.install(|| {
             use rayon::prelude::*;
             (0..n_tiles).into_par_iter().for_each(|t| {
@@ -538,7 +557,17 @@ impl Job<'_, '_> {
         let counter = &self.next_query[ti];
         let mut ctx = TraceCtx::new(ti as u32, self.threads, counter.load(Ordering::Relaxed));
         let tr = self.tile_rect(t);
-        let mut px: Vec<([f64; 3], u32)> = Vec::with_capacity(tr.len());
+        let mut px = self.read_tile(film, &tr);
+        let work = up_to(&px, target);
+        let taken = self.sample_tile(&mut ctx, &tr, &work, &mut *px);
+        counter.store(ctx.query_counter(), Ordering::Relaxed);
+        self.write_tile(film, &tr, px, &ctx.stats);
+        taken
+    }
+
+    /// The running sums and counts of the tile's pixels, in the tile's order.
+    fn read_tile(&self, film: &Mutex<&mut Accum>, tr: &Rect) -> Vec<([f64; 3], u32)> {
+        let mut px = Vec::with_capacity(tr.len());
         if let Ok(f) = film.lock() {
             for y in tr.y0..tr.y1 {
                 for x in tr.x0..tr.x1 {
@@ -547,9 +576,18 @@ impl Job<'_, '_> {
                 }
             }
         }
-        let taken = self.sample_tile(&mut ctx, &tr, &mut px, target);
+        px
+    }
+
+    /// Store the tile's pixels back into the film, with the counters.
+    fn write_tile(
+        &self,
+        film: &Mutex<&mut Accum>,
+        tr: &Rect,
+        px: Vec<([f64; 3], u32)>,
+        stats: &Stats,
+    ) {
         let tw = tr.width() as usize;
-        counter.store(ctx.query_counter(), Ordering::Relaxed);
         if let Ok(mut f) = film.lock() {
             for (i, (sum, count)) in px.into_iter().enumerate() {
                 let (x, y) = (tr.x0 + (i % tw) as u32, tr.y0 + (i / tw) as u32);
@@ -557,65 +595,63 @@ impl Job<'_, '_> {
                 f.sums[j] = sum;
                 f.counts[j] = count;
             }
-            f.stats.merge(&ctx.stats);
+            f.stats.merge(stats);
         }
-        taken
     }
 
-    /// Bring the tile's pixels (`px`: their running sums and counts, in
-    /// the tile's order) up to `target` samples; returns the samples taken.
+    /// Take the samples `work` asks for (per tile pixel `i`, samples
+    /// `start..end`, in that order) and hand each to `sink`; returns the
+    /// samples taken.
     ///
     /// The camera rays of up to [`batch::MAX`] pixel samples are traced
     /// together (the integrator's `li_batch`: ray streams), each with its
     /// own random stream, so a sample's value does not depend on the
-    /// samples it is batched with; each pixel adds its samples in sample
-    /// order. Stops early (the samples traced so far counted) on a failure
-    /// or an interrupt.
-    fn sample_tile(
+    /// samples it is batched with; the sink gets each pixel's samples in
+    /// sample order. Stops early (the samples traced so far counted) on a
+    /// failure or an interrupt.
+    fn sample_tile<S: Sink + ?Sized>(
         &self,
         ctx: &mut TraceCtx,
         tr: &Rect,
-        px: &mut [([f64; 3], u32)],
-        target: u32,
+        work: &[(usize, u32, u32)],
+        sink: &mut S,
     ) -> u64 {
         let mut b = CameraBatch::new();
         let mut taken = 0u64;
         let tw = tr.width() as usize;
-        for i in 0..px.len() {
+        for &(i, start, end) in work {
             let (x, y) = (tr.x0 + (i % tw) as u32, tr.y0 + (i / tw) as u32);
             let pixel = y as u64 * self.width as u64 + x as u64;
-            for s in px[i].1..target {
+            for s in start..end {
                 if self.interrupt.is_some_and(|s| s.load(Ordering::Relaxed)) {
-                    return taken + self.flush(ctx, &mut b, px).unwrap_or(0);
+                    return taken + self.flush(ctx, &mut b, sink).unwrap_or(0);
                 }
-                if !self.camera_sample(ctx, x, y, pixel, s, i, &mut b, px) {
+                if !self.camera_sample(ctx, (x, y, pixel), s, i, &mut b, sink) {
                     return taken;
                 }
                 if b.len == batch::MAX {
-                    match self.flush(ctx, &mut b, px) {
+                    match self.flush(ctx, &mut b, sink) {
                         Some(n) => taken += n,
                         None => return taken,
                     }
                 }
             }
         }
-        taken + self.flush(ctx, &mut b, px).unwrap_or(0)
+        taken + self.flush(ctx, &mut b, sink).unwrap_or(0)
     }
 
-    /// Pixel sample `s` of pixel `i` of the tile (at `x`, `y`): its camera
-    /// ray joins the batch, or (no ray) the sample counts as black at once.
-    /// False once the render must stop (the camera failed).
-    #[allow(clippy::too_many_arguments)]
-    fn camera_sample(
+    /// Pixel sample `s` of tile pixel `i` (full-image `x`, `y`, index
+    /// `pixel`): its camera ray joins the batch, or (no ray) the sink gets a
+    /// black sample at once. False once the render must stop (the camera
+    /// failed).
+    fn camera_sample<S: Sink + ?Sized>(
         &self,
         ctx: &mut TraceCtx,
-        x: u32,
-        y: u32,
-        pixel: u64,
+        (x, y, pixel): (u32, u32, u64),
         s: u32,
         i: usize,
         b: &mut CameraBatch,
-        px: &mut [([f64; 3], u32)],
+        sink: &mut S,
     ) -> bool {
         ctx.rng = RngState::for_sample(self.seed, pixel, s as u64);
         let (jx, jy) = film_offset(self.filter, s, self.spp, self.stratified, &mut ctx.rng);
@@ -636,22 +672,22 @@ impl Job<'_, '_> {
                 if self.failure.check(ctx) {
                     return false;
                 }
-                // No ray: a black sample (adding 0 to the sum is exact, so
-                // its place among the pixel's samples does not matter).
-                px[i].1 += 1;
+                // No ray: a black sample (its place among the pixel's
+                // samples does not matter: nothing is added to the sum).
+                sink.sample(i, None, &mut ctx.stats);
                 true
             }
         }
     }
 
-    /// Trace the batch and add each sample to its pixel, in batch order
+    /// Trace the batch and hand each sample to the sink, in batch order
     /// (each pixel's samples are in sample order there); the samples
-    /// added, or `None` when a plugin failed.
-    fn flush(
+    /// taken, or `None` when a plugin failed.
+    fn flush<S: Sink + ?Sized>(
         &self,
         ctx: &mut TraceCtx,
         b: &mut CameraBatch,
-        px: &mut [([f64; 3], u32)],
+        sink: &mut S,
     ) -> Option<u64> {
         let n = b.len;
         if n == 0 {
@@ -665,19 +701,50 @@ impl Job<'_, '_> {
         }
         for k in 0..n {
             let (i, w) = b.slots[k];
-            let l = b.out[k].scale(w);
-            let (sum, count) = &mut px[i];
-            if l.is_finite() {
-                sum[0] += l.r as f64;
-                sum[1] += l.g as f64;
-                sum[2] += l.b as f64;
-            } else {
-                ctx.stats.nonfinite_samples += 1;
-            }
-            *count += 1;
+            sink.sample(i, Some(b.out[k].scale(w)), &mut ctx.stats);
         }
         Some(n as u64)
     }
+}
+
+/// The samples a pass asks of a tile's pixels `px`: per pixel, from its
+/// count up to `target`.
+fn up_to(px: &[([f64; 3], u32)], target: u32) -> Vec<(usize, u32, u32)> {
+    (px.iter().enumerate())
+        .filter(|(_, p)| p.1 < target)
+        .map(|(i, p)| (i, p.1, target))
+        .collect()
+}
+
+/// Where a tile's samples go: straight into its pixels' running sums, or
+/// (a small image, [`chunked`]) into a buffer added to them in order later.
+trait Sink {
+    /// A sample of tile pixel `i`: its radiance, or `None` for a sample
+    /// without a camera ray (black: counted, nothing added).
+    fn sample(&mut self, i: usize, l: Option<Color>, stats: &mut Stats);
+}
+
+impl Sink for [([f64; 3], u32)] {
+    #[inline]
+    fn sample(&mut self, i: usize, l: Option<Color>, stats: &mut Stats) {
+        add_sample(&mut self[i], l, stats);
+    }
+}
+
+/// Add a sample to a pixel's running sum and count: a non-finite one (a
+/// plugin's NaN or infinity) counts as black and is reported.
+#[inline]
+fn add_sample(p: &mut ([f64; 3], u32), l: Option<Color>, stats: &mut Stats) {
+    if let Some(l) = l {
+        if l.is_finite() {
+            p.0[0] += l.r as f64;
+            p.0[1] += l.g as f64;
+            p.0[2] += l.b as f64;
+        } else {
+            stats.nonfinite_samples += 1;
+        }
+    }
+    p.1 += 1;
 }
 
 /// Camera rays waiting to be traced together: each with its random stream
