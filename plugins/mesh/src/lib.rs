@@ -284,28 +284,41 @@ impl Object for Mesh {
                 Some(u) => [u[t[0] as usize], u[t[1] as usize], u[t[2] as usize]],
                 None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
             };
-            out.uv = [
-                b[0] * uv[0][0] + b[1] * uv[1][0] + b[2] * uv[2][0],
-                b[0] * uv[0][1] + b[1] * uv[1][1] + b[2] * uv[2][1],
-            ];
-            let (du02, du12) = (uv[0][0] - uv[2][0], uv[1][0] - uv[2][0]);
-            let (dv02, dv12) = (uv[0][1] - uv[2][1], uv[1][1] - uv[2][1]);
-            let (dp02, dp12) = (p0 - p2, p1 - p2);
-            let det = du02 * dv12 - dv02 * du12;
-            let (dpdu, dpdv) = if det.abs() > 1e-12 {
-                let inv = 1.0 / det;
-                (
-                    (dv12 * dp02 - dv02 * dp12) * inv,
-                    (du02 * dp12 - du12 * dp02) * inv,
-                )
-            } else {
-                ng.any_orthonormal_pair()
-            };
-            out.dpdu = dpdu.into();
-            out.dpdv = dpdv.into();
-            out.filled |= geom_mask::UV | geom_mask::TANGENTS;
+            if mask & geom_mask::UV != 0 {
+                out.uv = [
+                    b[0] * uv[0][0] + b[1] * uv[1][0] + b[2] * uv[2][0],
+                    b[0] * uv[0][1] + b[1] * uv[1][1] + b[2] * uv[2][1],
+                ];
+                out.filled |= geom_mask::UV;
+            }
+            // The tangents only when asked: the path and most shaders read
+            // uv (textures) and never dp/du.
+            if mask & geom_mask::TANGENTS != 0 {
+                (out.dpdu, out.dpdv) = tangents(uv, [p0, p1, p2], ng);
+                out.filled |= geom_mask::TANGENTS;
+            }
         }
     }
+}
+
+/// dp/du and dp/dv of the triangle `p` with texture coordinates `uv`
+/// (pbrt-v4's, from the edges to the third vertex), or any orthonormal
+/// pair around `ng` where the uv map is degenerate.
+fn tangents(uv: [[f32; 2]; 3], p: [Vec3; 3], ng: Vec3) -> (Float3, Float3) {
+    let (du02, du12) = (uv[0][0] - uv[2][0], uv[1][0] - uv[2][0]);
+    let (dv02, dv12) = (uv[0][1] - uv[2][1], uv[1][1] - uv[2][1]);
+    let (dp02, dp12) = (p[0] - p[2], p[1] - p[2]);
+    let det = du02 * dv12 - dv02 * du12;
+    let (dpdu, dpdv) = if det.abs() > 1e-12 {
+        let inv = 1.0 / det;
+        (
+            (dv12 * dp02 - dv02 * dp12) * inv,
+            (du02 * dp12 - du12 * dp02) * inv,
+        )
+    } else {
+        ng.any_orthonormal_pair()
+    };
+    (dpdu.into(), dpdv.into())
 }
 
 impl PrimitiveSet for Mesh {
