@@ -74,6 +74,10 @@ fn stats_json(
         "lights": world.lights.len(),
         "files_read": world.files_read,
         "rays": rays_json(s),
+        // Every ray traced (camera, scattered, shadow) over the render's
+        // wall-clock seconds: counted per thread, no clock read per ray.
+        "rays_per_second": s.rays.iter().sum::<u64>() as f64 / t.render.as_secs_f64().max(1e-9),
+        "paths_per_second": s.rays[ray_kind::CAMERA as usize] as f64 / t.render.as_secs_f64().max(1e-9),
         "local_geom": {
             "calls": s.local_geom_calls,
             "position": s.local_geom_fields[bit(geom_mask::POSITION)],
