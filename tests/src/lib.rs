@@ -124,6 +124,10 @@ pub fn fixtures_dir() -> &'static Path {
             "rtk_panickyintegrator",
             "-p",
             "rtk_keeper",
+            "-p",
+            "rtk_streamsphere",
+            "-p",
+            "rtk_brokenstream",
             "--manifest-path",
         ])
         .arg(&manifest)
@@ -188,6 +192,25 @@ pub fn later_minor_dir() -> &'static Path {
                 ),
                 ("accel/src/lib.rs", "1.0 / 16384.0", "1.0 / 8192.0"),
             ],
+        )
+    })
+}
+
+/// A plugin whose object record has no stream entries, as one built before
+/// rtk-abi 3.1 has none: the panicky body against a copy of the kernel
+/// whose SDK leaves every appended entry out of the records it builds
+/// (they read as `None` to the host, as a shorter record's do).
+pub fn without_streams_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        other_kernel_plugin(
+            "nostreams",
+            None,
+            &[(
+                "sdk/src/gen.rs",
+                "$( $name3: Some($name3::<T, D>), )*",
+                "$( $name3: None, )*",
+            )],
         )
     })
 }

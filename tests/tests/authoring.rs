@@ -619,3 +619,85 @@ fn conform_refuses_bad_arguments() {
         r.stdout
     );
 }
+
+/// `stream-parity` on a fixture whose stream entries are its own (a lane
+/// loop after a root pass) and right: the check runs, on all three object
+/// entries, and passes.
+#[test]
+fn conform_stream_parity_passes_right_stream_entries() {
+    let r = conform(&fixture("streamsphere"));
+    passes(
+        "streamsphere",
+        &r,
+        &["pass  stream-parity          intersect_batch, occluded_batch, local_geom_batch: "],
+    );
+    assert!(r.stdout.contains("bit for bit"), "{}", r.stdout);
+}
+
+/// `stream-parity` on a fixture whose stream entries are one ulp off in `t`
+/// on the last hit lane of full batches of 64 (and drop that lane from
+/// `occluded_batch`'s mask): the only check that fails, naming the entry,
+/// the batch, the lane and both `t`s.
+#[test]
+fn conform_stream_parity_names_the_lane_a_broken_stream_differs_in() {
+    let r = conform(&fixture("brokenstream"));
+    assert!(!r.ok, "{}", r.stdout);
+    let fails: Vec<&str> = r.stdout.lines().filter(|l| l.starts_with("FAIL")).collect();
+    assert_eq!(fails.len(), 1, "{}", r.stdout);
+    let f = fails[0];
+    assert!(f.starts_with("FAIL  stream-parity"), "{f}");
+    for says in [
+        "intersect_batch: ",
+        "(64 queries from #",
+        "active 0xffffffffffffffff",
+        ", lane ",
+        ": t ",
+        "intersect's ",
+        "occluded_batch: ",
+    ] {
+        assert!(f.contains(says), "no `{says}` in {f}");
+    }
+    assert!(r.stdout.contains("pass  nested-inside-bvh"), "{}", r.stdout);
+    assert!(r.stderr.contains("`brokenstream` fails"), "{}", r.stderr);
+}
+
+/// Plugins on the SDK's default stream entries (loops over the single-ray
+/// ones, in the plugin) pass with the check run, every kind that has them;
+/// a plugin whose record has no stream entries (as one built before
+/// rtk-abi 3.1) passes as it did, with the check skipped, saying why.
+#[test]
+fn conform_stream_parity_defaults_pass_and_absent_entries_skip() {
+    for (class, entries) in [
+        (
+            "sphere",
+            "intersect_batch, occluded_batch, local_geom_batch: ",
+        ),
+        (
+            "list",
+            "intersect_batch, occluded_batch, local_geom_batch: ",
+        ),
+        ("point", "sample_li_batch: "),
+        ("path", "li_batch: "),
+    ] {
+        let r = conform(&built_in(class));
+        passes(
+            class,
+            &r,
+            &[&format!("pass  stream-parity          {entries}")],
+        );
+    }
+    let r = conform(&without_streams_dir().join("librtk_nostreams.so"));
+    passes(
+        "nostreams",
+        &r,
+        &[
+            "skip  stream-parity          (the plugin has no stream entries",
+            "pass  nested-inside-bvh",
+        ],
+    );
+    assert!(
+        r.stdout.contains("loop over its single-ray entries"),
+        "{}",
+        r.stdout
+    );
+}

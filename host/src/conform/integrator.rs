@@ -17,7 +17,9 @@
 //! - `deterministic`: the same ray with the same random stream gives the
 //!   same estimate, bit for bit (in another order: no hidden state);
 //! - `concurrent-queries`: estimates from every thread at once are one
-//!   thread's.
+//!   thread's;
+//! - `stream-parity`: `li_batch` gives `li`'s estimates, each ray with its
+//!   own random stream, and leaves each stream where `li` does (stream.rs).
 //!
 //! `furnace` and `black-without-light` assume the integrator estimates
 //! radiance (`normals` does not: `--skip` them).
@@ -185,6 +187,13 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
         suite.push(deterministic(&t, &rs, &est)?);
         suite.at("concurrent-queries");
         suite.push(concurrent_queries(&t, &rs, &est, cx.threads));
+    }
+    if suite.wants(super::stream::NAME) {
+        suite.at(super::stream::NAME);
+        // The mixed scene: shadow rays, mirror and glass paths, misses.
+        let t = Tracer::new(&mixed_world);
+        let c = super::stream::integrator(&t, &rs[..cx.n(1000, 10000).min(n)], SEED)?;
+        suite.push(c);
     }
     drop((w, dark_world, mixed_world));
 

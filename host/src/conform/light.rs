@@ -7,7 +7,8 @@
 //!   positive (infinite allowed), its radiance finite and ≥ 0, its density
 //!   finite and > 0; `le` finite and ≥ 0; some point receives light;
 //! - `deterministic`: the same query gives the same sample, bit for bit;
-//! - `concurrent-queries`: from every thread at once, one thread's answers.
+//! - `concurrent-queries`: from every thread at once, one thread's answers;
+//! - `stream-parity`: `sample_li_batch` gives `sample_li`'s samples (stream.rs).
 //!
 //! A light without `le` is a delta light to the host (a point or a single
 //! direction: no ray can find it, and `path` weighs it by next-event
@@ -36,10 +37,10 @@ use rtk_kernel::RngState;
 
 /// One query: the point, the random numbers, the time.
 #[derive(Clone, Copy)]
-struct Query {
-    p: Vec3,
-    u: [f32; 2],
-    time: f32,
+pub(crate) struct Query {
+    pub p: Vec3,
+    pub u: [f32; 2],
+    pub time: f32,
 }
 
 fn sample(l: &Light, ctx: &mut TraceCtx, q: &Query) -> Result<Option<LightSample>> {
@@ -141,6 +142,12 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
     suite.push(deterministic(light, &mut ctx, &queries, &results)?);
     suite.at("concurrent-queries");
     suite.push(concurrent_queries(light, &queries, &results, cx.threads));
+    if suite.wants(super::stream::NAME) {
+        suite.at(super::stream::NAME);
+        // Its own masks' stream: the other checks' draws stay as they were.
+        let c = super::stream::light(light, &queries, &mut RngState::seeded(0x57EA))?;
+        suite.push(c);
+    }
     drop(w);
 
     suite.at("unknown-key-refused");

@@ -3,7 +3,9 @@
 //! objects and aggregates (object.rs), shaders (shader.rs), cameras,
 //! lights and integrators (camera.rs, light.rs, integrator.rs); every kind
 //! also gets `unknown-key-refused` and, given `--panic-param`,
-//! `panics-reported` (panics.rs). One line per check (pass, FAIL or skip); a
+//! `panics-reported` (panics.rs); objects, lights and integrators get
+//! `stream-parity`, their ray-stream entries against the single-ray ones
+//! (stream.rs). One line per check (pass, FAIL or skip); a
 //! non-zero exit on any failure.
 //!
 //! The plugin is created with `--params` (default: none; when it refuses
@@ -18,6 +20,7 @@ mod light;
 mod object;
 mod panics;
 mod shader;
+mod stream;
 
 use crate::stress::{header, Bench, Size};
 use anyhow::{bail, Context, Result};
@@ -83,14 +86,15 @@ const CONFORM_HELP: &str = "\
 Checks by kind (docs/plugins.md has the details):
   objects     children, nearest-hit, ties-lowest-index, any-hit, bounds-contain-hits,
               interval-respected, local-geom, nested-inside-bvh, bvh-nested-inside,
-              concurrent-queries
+              concurrent-queries, stream-parity
   shaders     finite, energy, weight-matches-eval, pdf-matches-sample, pdf-integrates, reciprocity
   cameras     finite, unit-directions, time-in-shutter, pixel-centres, not-mirrored,
               deterministic, concurrent-queries
   lights      finite, delta-light, points-on-light (delta lights); at-infinity,
               li-matches-le, pdf-matches-sample, pdf-integrates (environment lights);
-              deterministic, concurrent-queries
-  integrators finite, furnace, black-without-light, deterministic, concurrent-queries
+              deterministic, concurrent-queries, stream-parity
+  integrators finite, furnace, black-without-light, deterministic, concurrent-queries,
+              stream-parity
   every kind  unknown-key-refused, panics-reported (with --panic-param)
 
 Examples:

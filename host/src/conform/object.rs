@@ -202,7 +202,7 @@ fn show(h: &Option<Hit>) -> String {
     }
 }
 
-fn ray_text(r: &Ray) -> String {
+pub(crate) fn ray_text(r: &Ray) -> String {
     format!(
         "o {:?} d {:?} time {:?}",
         r.origin.to_array(),
@@ -603,6 +603,11 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<Shape> {
         }
         Shape::Primitive => primitive(cx, suite, scenes * nrays)?,
     }
+    if suite.wants(super::stream::NAME) {
+        suite.at(super::stream::NAME);
+        let c = stream_parity(cx, shape)?;
+        suite.push(c);
+    }
     suite.at("interior-parity");
     let points = cx.n(2000, 20000);
     let c = super::interior::check(cx, shape, points)?;
@@ -612,6 +617,49 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<Shape> {
     suite.push(c);
     super::panics::run(cx, suite, shape.count())?;
     Ok(shape)
+}
+
+/// The scratch files' index of the stream check's scene (the others are 0..scenes).
+const STREAM_SCENE: usize = 1000;
+
+/// `stream-parity` on a world whose root is the plugin itself (so its own
+/// entries are asked, not an aggregate's over it): alone (a primitive) or
+/// over a random scene's children, with the suite's random rays. It draws
+/// from a stream of its own, so the checks after it see what they saw
+/// before it existed.
+fn stream_parity(cx: &mut Cx, shape: Shape) -> Result<Check> {
+    let saved = std::mem::replace(&mut cx.rng, RngState::seeded(0x57EA));
+    let nrays = cx.n(2000, 20000);
+    let res = stream_world(cx, shape).and_then(|w| {
+        let rs = rays(&mut cx.rng, nrays, &w);
+        super::stream::object(&w, &cx.class, &rs, &mut cx.rng)
+    });
+    cx.rng = saved;
+    res
+}
+
+/// The world of [`stream_parity`]. A primitive set at the root is wrapped
+/// in its `accel` aggregate by the shell, whose entries would be asked
+/// instead: it is built again with `accel = "none"`.
+fn stream_world(cx: &mut Cx, shape: Shape) -> Result<World> {
+    let scene = |params: &Params, cx: &mut Cx| -> Result<String> {
+        Ok(match shape {
+            Shape::Primitive => format!("{}{}", header("p"), def("p", &cx.class, params, &[])),
+            _ => {
+                let c = children(cx, shape, STREAM_SCENE, cx.n(12, 30))?;
+                world(&c.defs, &cx.class, params, &c.kids)
+            }
+        })
+    };
+    let params = cx.params.clone();
+    let text = scene(&params, cx)?;
+    let w = cx.bench.scene(&text)?;
+    if w.root.class_name() == cx.class || shape != Shape::Primitive {
+        return Ok(w);
+    }
+    let bare = params.with("accel", toml::Value::String("none".into()));
+    let text = scene(&bare, cx)?;
+    cx.bench.scene(&text)
 }
 
 /// A primitive: under bvh as under list, its own consistency, bounds,
