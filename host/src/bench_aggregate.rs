@@ -36,6 +36,10 @@ pub struct BenchArgs {
     /// Trace at most N rays of each set (evenly spaced through it; default: all 2^20).
     #[arg(long = "rays", value_name = "N")]
     pub max_rays: Option<usize>,
+    /// Trace through the aggregates' ray-stream entries, 64 rays per batch
+    /// (as `rtk trace --stream`), instead of one ray at a time.
+    #[arg(long)]
+    pub stream: bool,
     /// Print the results as JSON.
     #[arg(long)]
     pub json: bool,
@@ -220,7 +224,11 @@ fn time_interleaved(
     for _ in 0..a.repeats.max(1) {
         for (i, b) in built.iter().enumerate() {
             let t = Instant::now();
-            trace::trace_all(&b.world, rays, occluded, pool, next_query, &mut out)?;
+            let q = trace::Query {
+                occluded,
+                stream: a.stream,
+            };
+            trace::trace_all(&b.world, rays, q, pool, next_query, &mut out)?;
             best[i] = best[i].min(t.elapsed().as_secs_f64());
             hits[i] = out.iter().filter(|h| h.t.is_finite()).count();
         }
@@ -264,6 +272,7 @@ fn print_json(a: &BenchArgs, rows: &[Row], threads: usize) {
         "{}",
         serde_json::json!({
             "aggregate": a.name, "threads": threads, "repeats": a.repeats.max(1),
+            "path": if a.stream { "stream" } else { "single" },
             "rows": list,
         })
     );
@@ -272,10 +281,11 @@ fn print_json(a: &BenchArgs, rows: &[Row], threads: usize) {
 /// The table: a line per mesh, set and aggregate, with its ratios to NAME's.
 fn print_table(a: &BenchArgs, rows: &[Row], threads: usize) {
     println!(
-        "{} against {}: best of {} interleaved passes, {threads} threads; ratios are {} / the row's aggregate (Mrays/s > 1: {} is faster; build, memory < 1: {} is cheaper)",
+        "{} against {}: best of {} interleaved passes, {threads} threads, {} rays; ratios are {} / the row's aggregate (Mrays/s > 1: {} is faster; build, memory < 1: {} is cheaper)",
         a.name,
         a.against.join(","),
         a.repeats.max(1),
+        if a.stream { "streamed" } else { "single" },
         a.name,
         a.name,
         a.name

@@ -7,6 +7,7 @@ pub(crate) mod rays;
 use anyhow::{bail, Context, Result};
 use rays::{HitRec, RayRec};
 use rtk_kernel::abi::{Hit, Ray, Stats, TraceCtx};
+use rtk_kernel::sdk::batch;
 use rtk_shell::plugins::Module;
 use rtk_shell::{Parallel, PluginPath, Registry, World};
 use std::path::{Path, PathBuf};
@@ -27,6 +28,11 @@ pub struct TraceArgs {
     /// Any-hit queries (shadow rays) instead of nearest hits.
     #[arg(long)]
     pub occluded: bool,
+    /// Trace through the root's ray-stream entries, 64 consecutive rays per
+    /// batch (rtk-abi 3.1), instead of one ray at a time: the hits are the
+    /// same bit for bit (`rtk conform` checks every plugin's).
+    #[arg(long)]
+    pub stream: bool,
     /// The aggregate class: over the mesh, or in place of the scene root's class.
     #[arg(long, value_name = "NAME")]
     pub aggregate: Option<String>,
@@ -118,7 +124,11 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     let mut hits = vec![HitRec::MISS; rays.len()];
     for _ in 0..a.iters {
         let t = Instant::now();
-        stats = trace_all(&world, &rays, a.occluded, pool, &next_query, &mut hits)?;
+        let q = Query {
+            occluded: a.occluded,
+            stream: a.stream,
+        };
+        stats = trace_all(&world, &rays, q, pool, &next_query, &mut hits)?;
         times.push(t.elapsed().as_secs_f64());
     }
     let passes = times.clone();
@@ -132,6 +142,7 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
         input: a.input.display().to_string(),
         set: set_name,
         query: if a.occluded { "occluded" } else { "intersect" },
+        path: if a.stream { "stream" } else { "single" },
         rays: rays.len(),
         rays_hash: format!("{:016x}", rays::rays_hash(&rays)),
         threads: pool.current_num_threads(),
@@ -323,12 +334,21 @@ fn root_object(file: &rtk_shell::SceneFile) -> Result<String> {
     }
 }
 
+/// What each ray asks, and through which entries.
+#[derive(Clone, Copy)]
+pub(crate) struct Query {
+    /// Any hit instead of the nearest.
+    pub occluded: bool,
+    /// Through the stream entries, in batches of [`batch::MAX`] rays.
+    pub stream: bool,
+}
+
 /// Trace every ray on the pool, in chunks, each ray's hit into its place
 /// in `out` (as long as `rays`); the counters of the pass.
 pub(crate) fn trace_all(
     world: &World,
     rays: &[RayRec],
-    occluded: bool,
+    q: Query,
     pool: &rayon::ThreadPool,
     next_query: &[AtomicU64],
     out: &mut [HitRec],
@@ -343,10 +363,16 @@ pub(crate) fn trace_all(
                 let ti = rayon::current_thread_index().unwrap_or(0);
                 let counter = &next_query[ti];
                 let mut ctx = TraceCtx::new(ti as u32, threads, counter.load(Ordering::Relaxed));
-                // One hit record per chunk, reset per ray.
-                let mut hit = Hit::new();
-                for (r, o) in chunk.iter().zip(out) {
-                    *o = trace_one(world, &mut ctx, &mut hit, r, occluded);
+                if q.stream {
+                    for (rs, os) in chunk.chunks(batch::MAX).zip(out.chunks_mut(batch::MAX)) {
+                        trace_batch(world, &mut ctx, rs, q.occluded, os);
+                    }
+                } else {
+                    // One hit record per chunk, reset per ray.
+                    let mut hit = Hit::new();
+                    for (r, o) in chunk.iter().zip(out) {
+                        *o = trace_one(world, &mut ctx, &mut hit, r, q.occluded);
+                    }
                 }
                 counter.store(ctx.query_counter(), Ordering::Relaxed);
                 let failure = ctx.failure().map(|(c, m)| format!("plugin `{c}` {m}"));
@@ -364,6 +390,37 @@ pub(crate) fn trace_all(
     Ok(stats)
 }
 
+/// A ray file's ray as the kernel's, at time 0.
+#[inline]
+fn to_ray(r: &RayRec) -> Ray {
+    Ray {
+        origin: r.o.into(),
+        dir: r.d.into(),
+        t_min: r.t_min,
+        t_max: r.t_max,
+        time: 0.0,
+        generation: 0,
+    }
+}
+
+/// The record of an occluded ray (`prim` 1 says blocked).
+const BLOCKED: HitRec = HitRec {
+    t: 0.0,
+    prim: 1,
+    ..HitRec::MISS
+};
+
+/// The record of a nearest hit: its `t`, the leaf's primitive, its uv.
+#[inline]
+fn hit_rec(hit: &Hit) -> HitRec {
+    HitRec {
+        t: hit.t,
+        prim: hit.at(hit.depth.saturating_sub(1)),
+        u: hit.uv[0],
+        v: hit.uv[1],
+    }
+}
+
 #[inline]
 fn trace_one(
     world: &World,
@@ -372,35 +429,59 @@ fn trace_one(
     r: &RayRec,
     occluded: bool,
 ) -> HitRec {
-    let ray = Ray {
-        origin: r.o.into(),
-        dir: r.d.into(),
-        t_min: r.t_min,
-        t_max: r.t_max,
-        time: 0.0,
-        generation: 0,
-    };
-    let miss = HitRec::MISS;
+    let ray = to_ray(r);
     if occluded {
         return if world.root.occluded(ctx, &ray) {
-            HitRec {
-                t: 0.0,
-                prim: 1,
-                ..miss
-            }
+            BLOCKED
         } else {
-            miss
+            HitRec::MISS
         };
     }
     hit.reset();
     if !world.root.intersect(ctx, &ray, hit) {
-        return miss;
+        return HitRec::MISS;
     }
-    HitRec {
-        t: hit.t,
-        prim: hit.at(hit.depth.saturating_sub(1)),
-        u: hit.uv[0],
-        v: hit.uv[1],
+    hit_rec(hit)
+}
+
+/// Up to [`batch::MAX`] rays through the root's stream entries, every lane
+/// active, each lane's record into `out`.
+#[inline]
+fn trace_batch(
+    world: &World,
+    ctx: &mut TraceCtx,
+    rs: &[RayRec],
+    occluded: bool,
+    out: &mut [HitRec],
+) {
+    // `rs` is never empty (a chunk of a chunk): its first ray fills the rest.
+    let mut rays = [to_ray(&rs[0]); batch::MAX];
+    for (d, r) in rays.iter_mut().zip(rs) {
+        *d = to_ray(r);
+    }
+    let n = rs.len();
+    let active = batch::all(n);
+    if occluded {
+        let m = world.root.occluded_stream(ctx, &rays[..n], active);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = if (m >> i) & 1 == 1 {
+                BLOCKED
+            } else {
+                HitRec::MISS
+            };
+        }
+        return;
+    }
+    let mut hits = [Hit::new(); batch::MAX];
+    let m = world
+        .root
+        .intersect_stream(ctx, &rays[..n], &mut hits[..n], active);
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = if (m >> i) & 1 == 1 {
+            hit_rec(&hits[i])
+        } else {
+            HitRec::MISS
+        };
     }
 }
 
@@ -417,6 +498,8 @@ struct Report<'a> {
     input: String,
     set: String,
     query: &'static str,
+    /// Through which entries: `single` or `stream`.
+    path: &'static str,
     rays: usize,
     rays_hash: String,
     threads: usize,
@@ -457,7 +540,7 @@ impl Report<'_> {
         let per_ray = |x: u64| x as f64 / self.rays.max(1) as f64;
         if json {
             let j = serde_json::json!({
-                "input": self.input, "set": self.set, "query": self.query,
+                "input": self.input, "set": self.set, "query": self.query, "path": self.path,
                 "rays": self.rays, "rays_hash": self.rays_hash, "threads": self.threads,
                 "mrays_per_s": mrays, "trace_seconds": self.seconds,
                 "pass_seconds": self.passes,
@@ -471,8 +554,8 @@ impl Report<'_> {
             println!("{j}");
         } else {
             println!(
-                "{} {} {}: {} rays (hash {}), {} threads, cpu simd {}\n  {:.2} Mrays/s ({:.3} s), {} build {:.1} ms (loading {:.1} ms), memory {:.1} MB\n  hits {}, sum_t {:.6}, sum_prim {}\n  {:.1} node tests and {:.1} primitive tests per ray",
-                self.input, self.set, self.query, self.rays, self.rays_hash, self.threads, cpu_simd(),
+                "{} {} {} ({}): {} rays (hash {}), {} threads, cpu simd {}\n  {:.2} Mrays/s ({:.3} s), {} build {:.1} ms (loading {:.1} ms), memory {:.1} MB\n  hits {}, sum_t {:.6}, sum_prim {}\n  {:.1} node tests and {:.1} primitive tests per ray",
+                self.input, self.set, self.query, self.path, self.rays, self.rays_hash, self.threads, cpu_simd(),
                 mrays, self.seconds, self.aggregate, self.build_seconds * 1e3, self.load_seconds * 1e3,
                 self.memory_bytes as f64 / 1e6,
                 n_hits, sum_t, sum_prim,
