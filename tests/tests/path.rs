@@ -320,3 +320,59 @@ children = [{{ object = "ball", shader = "s" }}]
         );
     }
 }
+
+/// `--profile` times the scene services without changing the image: on
+/// the Cornell box (a bvh over 32 triangles, an area light, Lambert walls)
+/// every part of the render is seen and the shares of the threads' time
+/// add up to at most 1; the parts timed are where a path spends its time
+/// (traversal is the largest of the services); the image is the plain
+/// render's bit for bit.
+#[test]
+fn profile_shares_add_up_and_leave_the_image_alone() {
+    let cornell = root().join("scenes/cornell.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "--spp",
+        "4",
+        "--set",
+        "render.width=64",
+        "--set",
+        "render.height=64",
+    ];
+    let (plain, plain_img) = render_file(&cornell, dir.path(), &args);
+    assert!(plain.ok, "{}", plain.stderr);
+    let with: Vec<&str> = args.iter().copied().chain(["--profile"]).collect();
+    let (run, img) = render_file(&cornell, dir.path(), &with);
+    assert!(run.ok, "{}", run.stderr);
+    assert!(
+        plain_img.unwrap().data == img.unwrap().data,
+        "the profile changed the image"
+    );
+    let p = &run.stats()["profile"];
+    let share = |k: &str| {
+        p["shares"][k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{k}: {p}"))
+    };
+    let parts = [
+        "traversal",
+        "surface",
+        "lights",
+        "integrator_and_shaders",
+        "render_loop",
+    ];
+    let sum: f64 = parts.iter().map(|k| share(k)).sum();
+    assert!(
+        sum <= 1.0 + 1e-6 && sum > 0.5,
+        "shares add up to {sum}: {p}"
+    );
+    for k in parts {
+        assert!(share(k) > 0.0, "{k}: {p}");
+    }
+    assert!(share("traversal") > share("surface"), "{p}");
+    let b = &p["boundary"];
+    // 64x64 at 4 spp: every camera sample's li at least, and its rays.
+    assert!(b["crossings"].as_u64().unwrap() > 3 * 64 * 64 * 4, "{p}");
+    let per = b["seconds_per_crossing"].as_f64().unwrap();
+    assert!(per > 0.0 && per < 1e-6, "{p}");
+}

@@ -5,6 +5,7 @@
 //! ([`tracer`]) and the `--stats` record ([`stats`]).
 
 pub(crate) mod film_file;
+mod profile;
 pub(crate) mod render_loop;
 mod stats;
 pub(crate) mod tracer;
@@ -52,6 +53,12 @@ pub struct RenderArgs {
     /// Print statistics (timings, rays by kind, plugins, objects) as JSON on stdout.
     #[arg(long)]
     stats: bool,
+    /// With the statistics, where the time went: traversal, surface records,
+    /// light sampling, integrator and shaders, the render loop, and an
+    /// estimate of the plugin boundary's share (docs/design.md). Costs a
+    /// little time: the services read a cycle counter per call.
+    #[arg(long)]
+    profile: bool,
     /// Extra folders to search for plugins first (repeatable).
     #[arg(long = "plugin-path", value_name = "DIR")]
     plugin_path: Vec<PathBuf>,
@@ -121,8 +128,11 @@ pub fn run(a: RenderArgs, start: Instant) -> Result<()> {
     let passes = Passes {
         time_limit,
         checkpoint_every: every,
+        profile: a
+            .profile
+            .then(|| profile::Profile::new(threads, &Tracer::new(&world).record())),
     };
-    let (end, render_time) = render_in_passes(&a, &world, &pool, &header, passes, &mut accum)?;
+    let (end, render_time) = render_in_passes(&a, &world, &pool, &header, &passes, &mut accum)?;
     let t_write = Instant::now();
     let (film, samples) = write_film(&a, &out, &header, accum)?;
     let times = stats::StepTimes {
@@ -132,8 +142,12 @@ pub fn run(a: RenderArgs, start: Instant) -> Result<()> {
         start,
     };
 
-    if a.stats {
-        stats::print(&a, &out, &world, &film, threads, &times, samples)?;
+    if a.stats || a.profile {
+        let profile = passes
+            .profile
+            .as_ref()
+            .map(|p| p.json(render_time.as_secs_f64(), threads, film.stats.shader_calls));
+        stats::print(&a, &out, &world, &film, threads, &times, samples, profile)?;
     }
     report_end(&a, end, &out, &film, world.desc.render.spp, samples, start);
     Ok(())
@@ -228,13 +242,15 @@ fn starting_film(a: &RenderArgs, header: &Header, width: u32, height: u32) -> Re
     }
 }
 
-/// When the passes stop early and how often they save a checkpoint.
-#[derive(Clone, Copy)]
+/// When the passes stop early, how often they save a checkpoint, and what
+/// they time.
 struct Passes {
     /// `--time-limit`.
     time_limit: Option<Duration>,
     /// `--checkpoint-every` (60 s by default).
     checkpoint_every: Duration,
+    /// `--profile`'s accumulators.
+    profile: Option<profile::Profile>,
 }
 
 /// Render the world into `accum` pass by pass until it is complete, the
@@ -245,11 +261,14 @@ fn render_in_passes(
     world: &rtk_shell::World,
     pool: &rayon::ThreadPool,
     header: &Header,
-    passes: Passes,
+    passes: &Passes,
     accum: &mut Accum,
 ) -> Result<(End, Duration)> {
     let spp = world.desc.render.spp;
-    let tracer = Tracer::new(world);
+    let tracer = match &passes.profile {
+        Some(p) => Tracer::new(world).with_profile(p),
+        None => Tracer::new(world),
+    };
     install_interrupt_handler();
     let t_render = Instant::now();
     let mut last_checkpoint = Instant::now();

@@ -10,7 +10,8 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// Print the `--stats` record on stdout, with the fewest and most samples
-/// per pixel (`samples`).
+/// per pixel (`samples`) and `--profile`'s record.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn print(
     a: &RenderArgs,
     out: &Path,
@@ -19,9 +20,13 @@ pub(super) fn print(
     threads: usize,
     times: &StepTimes,
     (min, max): (u32, u32),
+    profile: Option<serde_json::Value>,
 ) -> Result<()> {
     let mut json = stats_json(a, out, world, film, threads, times);
     json["samples_per_pixel"] = serde_json::json!([min, max]);
+    if let Some(p) = profile {
+        json["profile"] = p;
+    }
     // A closed pipe (`| head`) is not an error worth a panic.
     use std::io::Write;
     let _ = writeln!(

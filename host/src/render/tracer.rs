@@ -3,6 +3,7 @@
 //! what it does in the per-thread statistics; no shading policy lives here
 //! (that is the integrator's), nothing allocates or locks.
 
+use super::profile::{ticks, Part, Profile};
 use rtk_handles::{SceneRecord, Services, ServicesTable, Shader};
 use rtk_kernel::abi::*;
 use rtk_kernel::glam::Vec3;
@@ -13,6 +14,8 @@ pub struct Tracer<'w> {
     world: &'w World,
     table: ServicesTable<Tracer<'w>>,
     background: Color,
+    /// `--profile`'s accumulators, when asked for.
+    profile: Option<&'w Profile>,
 }
 
 impl<'w> Tracer<'w> {
@@ -23,6 +26,34 @@ impl<'w> Tracer<'w> {
             world,
             table: ServicesTable::new(),
             background: Color::new(bg[0], bg[1], bg[2]),
+            profile: None,
+        }
+    }
+
+    /// The tracer timing its services into `profile` (`--profile`).
+    pub fn with_profile(self, profile: &'w Profile) -> Self {
+        Tracer {
+            profile: Some(profile),
+            ..self
+        }
+    }
+
+    /// The services' record, for timing an empty crossing.
+    pub fn record(&self) -> SceneRecord<'_> {
+        self.scene()
+    }
+
+    /// `f`, its time added to `part` of the profile when there is one.
+    #[inline(always)]
+    fn timed<R>(&self, ctx: &mut TraceCtx, part: Part, f: impl FnOnce(&mut TraceCtx) -> R) -> R {
+        match self.profile {
+            None => f(ctx),
+            Some(p) => {
+                let (thread, t0) = (ctx.thread_index(), ticks());
+                let r = f(ctx);
+                p.add(thread, part, t0);
+                r
+            }
         }
     }
 
@@ -39,7 +70,9 @@ impl<'w> Tracer<'w> {
     #[inline]
     pub fn camera_li(&self, ctx: &mut TraceCtx, ray: &Ray) -> Color {
         count(ctx, ray_kind::CAMERA);
-        self.world.integrator.radiance(ctx, &self.scene(), ray)
+        self.timed(ctx, Part::Integrator, |ctx| {
+            self.world.integrator.radiance(ctx, &self.scene(), ray)
+        })
     }
 
     /// Radiance along each of a batch of camera rays (each counted as a
@@ -52,9 +85,11 @@ impl<'w> Tracer<'w> {
         out: &mut [Color],
     ) {
         ctx.stats.rays[ray_kind::CAMERA as usize] += rays.len() as u64;
-        self.world
-            .integrator
-            .radiance_batch(ctx, &self.scene(), rays, rngs, out)
+        self.timed(ctx, Part::Integrator, |ctx| {
+            self.world
+                .integrator
+                .radiance_batch(ctx, &self.scene(), rays, rngs, out)
+        })
     }
 }
 
@@ -85,12 +120,16 @@ impl Services for Tracer<'_> {
 
     fn intersect(&self, ctx: &mut TraceCtx, ray: &Ray, kind: u32, hit: &mut Hit) -> bool {
         count(ctx, kind);
-        self.world.root.intersect(ctx, ray, hit)
+        self.timed(ctx, Part::Traversal, |ctx| {
+            self.world.root.intersect(ctx, ray, hit)
+        })
     }
 
     fn occluded(&self, ctx: &mut TraceCtx, ray: &Ray) -> bool {
         count(ctx, ray_kind::SHADOW);
-        self.world.root.occluded(ctx, ray)
+        self.timed(ctx, Part::Traversal, |ctx| {
+            self.world.root.occluded(ctx, ray)
+        })
     }
 
     fn local_geom(&self, ctx: &mut TraceCtx, ray: &Ray, hit: &Hit, mask: u32, out: &mut LocalGeom) {
@@ -98,8 +137,10 @@ impl Services for Tracer<'_> {
         for (bit, n) in ctx.stats.local_geom_fields.iter_mut().enumerate() {
             *n += ((mask >> bit) & 1) as u64;
         }
-        self.world.root.local_geom(ctx, ray, hit, mask, out);
-        self.world.root_inst.bind(out);
+        self.timed(ctx, Part::Surface, |ctx| {
+            self.world.root.local_geom(ctx, ray, hit, mask, out);
+            self.world.root_inst.bind(out);
+        })
     }
 
     fn background(&self, ctx: &mut TraceCtx, ray: &Ray) -> Color {
@@ -152,10 +193,8 @@ impl Services for Tracer<'_> {
         time: f32,
     ) -> Option<LightSample> {
         ctx.stats.light_samples += 1;
-        self.world
-            .lights
-            .get(index as usize)?
-            .sample_li(ctx, p, u, time)
+        let l = self.world.lights.get(index as usize)?;
+        self.timed(ctx, Part::Lights, |ctx| l.sample_li(ctx, p, u, time))
     }
 
     fn intersect_batch(
@@ -167,12 +206,16 @@ impl Services for Tracer<'_> {
         active: u64,
     ) -> u64 {
         count_batch(ctx, kind, active, rays.len());
-        self.world.root.intersect_stream(ctx, rays, hits, active)
+        self.timed(ctx, Part::Traversal, |ctx| {
+            self.world.root.intersect_stream(ctx, rays, hits, active)
+        })
     }
 
     fn occluded_batch(&self, ctx: &mut TraceCtx, rays: &[Ray], active: u64) -> u64 {
         count_batch(ctx, ray_kind::SHADOW, active, rays.len());
-        self.world.root.occluded_stream(ctx, rays, active)
+        self.timed(ctx, Part::Traversal, |ctx| {
+            self.world.root.occluded_stream(ctx, rays, active)
+        })
     }
 
     fn local_geom_batch(
@@ -189,13 +232,15 @@ impl Services for Tracer<'_> {
         for (bit, c) in ctx.stats.local_geom_fields.iter_mut().enumerate() {
             *c += ((mask >> bit) & 1) as u64 * n;
         }
-        self.world
-            .root
-            .local_geom_stream(ctx, rays, hits, active, mask, out);
-        let m = rays.len().min(hits.len()).min(out.len());
-        for i in rtk_kernel::sdk::batch::lanes(active, m) {
-            self.world.root_inst.bind(&mut out[i]);
-        }
+        self.timed(ctx, Part::Surface, |ctx| {
+            self.world
+                .root
+                .local_geom_stream(ctx, rays, hits, active, mask, out);
+            let m = rays.len().min(hits.len()).min(out.len());
+            for i in rtk_kernel::sdk::batch::lanes(active, m) {
+                self.world.root_inst.bind(&mut out[i]);
+            }
+        })
     }
 
     fn material(&self, shader: u32) -> Option<ShaderRef> {
