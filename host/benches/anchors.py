@@ -44,7 +44,9 @@ def anchor(cmd):
 
 def rtk(exe, mesh, agg, rayset, extra, threads):
     cls, *params = agg.split("+")
-    sets = [x for p in params for x in ("--set", f"objects.world.{p}")]
+    # `+stream` is not a parameter: it traces through the stream entries.
+    sets = [x for p in params if p != "stream" for x in ("--set", f"objects.world.{p}")]
+    sets += ["--stream"] if "stream" in params else []
     cmd = [exe, "trace", mesh, "--rayset", rayset, "--aggregate", cls,
            "--threads", str(threads), "--iters", "3", "--json"] + sets + extra
     out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
