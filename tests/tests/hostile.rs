@@ -704,3 +704,46 @@ fn a_million_transformed_instances_render() {
     assert!(run.ok, "{}", run.stderr);
     assert!(img.is_some());
 }
+
+/// Under an address-space limit (`ulimit -v`, 4 GiB) too small for 64
+/// threads' stacks, `--threads 64` renders with fewer threads, saying why
+/// on stderr, and the image is the one-thread image (images do not depend
+/// on the thread count).
+#[test]
+#[cfg(target_os = "linux")]
+fn threads_beyond_the_address_space_limit_are_reduced_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = root().join("scenes/sphere-normals.toml");
+    let (one, many) = (dir.path().join("one.exr"), dir.path().join("many.exr"));
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let r = Run::from(
+        rtk(&["render", &s(&scene), "-q", "--threads", "1", "-o", &s(&one)])
+            .output()
+            .unwrap(),
+    );
+    assert!(r.ok, "{}", r.stderr);
+    let script = format!(
+        "ulimit -v 4194304 && exec {} render {} -q --threads 64 -o {}",
+        rtk_path().display(),
+        s(&scene),
+        s(&many)
+    );
+    let out = std::process::Command::new("sh")
+        .args(["-c", &script])
+        .env_remove("RTK_PLUGIN_PATH")
+        .output()
+        .unwrap();
+    let r = Run::from(out);
+    assert!(r.ok, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("64 threads asked for, using ")
+            && r.stderr
+                .contains("address-space limit (ulimit -v, 4.0 GiB)"),
+        "{}",
+        r.stderr
+    );
+    assert!(
+        std::fs::read(&one).unwrap() == std::fs::read(&many).unwrap(),
+        "the image depends on the thread count"
+    );
+}

@@ -23,25 +23,86 @@ impl Parallel for Pool<'_> {
 /// to start, 100000 practically never finish).
 const MAX_THREADS: usize = 1024;
 
+/// Each rendering thread's stack. Whitted recursion goes through plugin
+/// frames at every bounce (max_depth up to 1024): a roomy stack, committed
+/// only as used, but reserved in the address space whole.
+const STACK_BYTES: u64 = 64 << 20;
+
+/// Share of the address space left under a limit that the stacks may take:
+/// the rest is for the scene, its aggregates and the film.
+const STACK_SHARE: f64 = 0.5;
+
 /// The rendering pool: `threads` threads (default: all cores, at most
-/// [`MAX_THREADS`]).
+/// [`MAX_THREADS`]), fewer when an address-space limit (`ulimit -v`) has
+/// no room for their stacks, saying so on stderr.
 pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)> {
-    let threads = threads.unwrap_or_else(|| {
+    let asked = threads.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, |n| n.get().min(MAX_THREADS))
     });
-    if threads == 0 {
+    if asked == 0 {
         bail!("--threads must be at least 1");
     }
-    if threads > MAX_THREADS {
-        bail!("--threads must be at most {MAX_THREADS}, got {threads}");
+    if asked > MAX_THREADS {
+        bail!("--threads must be at most {MAX_THREADS}, got {asked}");
     }
+    let threads = match address_space_room() {
+        Some((room, limit)) => {
+            let fit = ((room as f64 * STACK_SHARE) as u64 / STACK_BYTES).max(1) as usize;
+            if fit < asked {
+                eprintln!(
+                    "warning: {asked} threads asked for, using {fit}: the address-space limit \
+                     (ulimit -v, {:.1} GiB) has room for {fit} threads' {} MiB stacks in half of \
+                     what is left ({:.1} GiB), the other half kept for the scene",
+                    limit as f64 / GIB,
+                    STACK_BYTES >> 20,
+                    room as f64 / GIB
+                );
+            }
+            fit.min(asked)
+        }
+        None => asked,
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("rtk-render-{i}"))
-        // Whitted recursion goes through plugin frames at every bounce
-        // (max_depth up to 1024): a roomy stack, committed only as used.
-        .stack_size(64 << 20)
+        .stack_size(STACK_BYTES as usize)
         .build()
         .context("starting the thread pool")?;
     Ok((pool, threads))
+}
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// Under an address-space limit: the bytes still free below it (the limit
+/// less what the process has mapped), and the limit. `None` without a
+/// limit (or where it cannot be read).
+fn address_space_room() -> Option<(u64, u64)> {
+    #[cfg(target_os = "linux")]
+    {
+        let mut lim = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: `getrlimit` writes one `rlimit` through the pointer, which
+        // points at a live, writable value of that type.
+        if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut lim) } != 0
+            || lim.rlim_cur == libc::RLIM_INFINITY
+        {
+            return None;
+        }
+        let limit = lim.rlim_cur as u64;
+        // The first field of statm: pages mapped (the address space in use).
+        let used = std::fs::read_to_string("/proc/self/statm")
+            .ok()?
+            .split_whitespace()
+            .next()?
+            .parse::<u64>()
+            .ok()?
+            * 4096;
+        Some((limit.saturating_sub(used), limit))
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        None
+    }
 }
