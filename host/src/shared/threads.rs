@@ -90,6 +90,8 @@ fn address_space_room() -> Option<(u64, u64)> {
         {
             return None;
         }
+        // `rlim_t` is u64 on 64-bit Linux, u32 on some 32-bit targets.
+        #[allow(clippy::unnecessary_cast)]
         let limit = lim.rlim_cur as u64;
         // The first field of statm: pages mapped (the address space in use).
         let used = std::fs::read_to_string("/proc/self/statm")
