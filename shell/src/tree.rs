@@ -298,10 +298,66 @@ fn out_of_range<E: de::Error>(v: impl std::fmt::Display) -> E {
     ))
 }
 
+/// The end of the message of a document nested beyond the parser's limit.
+const TOO_DEEP: &str = "values are nested too deeply";
+
+/// The byte range of the start of the line nested most deeply: a table
+/// header's or a key's dotted parts, plus the arrays and inline tables open
+/// on it (counted across lines, strings skipped). Only for pointing at a
+/// nesting error, so quoted keys holding dots may count a little high.
+fn deepest_line(src: &str) -> Range<usize> {
+    let (mut best, mut best_depth) = (0, 0);
+    let mut open = 0usize; // brackets and braces open from earlier lines
+    let mut start = 0;
+    for line in src.split_inclusive('\n') {
+        let code = line.split('#').next().unwrap_or("");
+        let t = code.trim_start();
+        let header = t.starts_with('[') && open == 0;
+        let key = if header {
+            t.trim_start_matches('[').split(']').next().unwrap_or("")
+        } else {
+            t.split('=')
+                .next()
+                .filter(|_| t.contains('='))
+                .unwrap_or("")
+        };
+        let mut depth = open + key.matches('.').count() + usize::from(!key.trim().is_empty());
+        let mut quote: Option<char> = None;
+        let value = if header { "" } else { &t[key.len()..] };
+        for c in value.chars() {
+            match (quote, c) {
+                (Some(q), c) if c == q => quote = None,
+                (Some(_), _) => {}
+                (None, '"' | '\'') => quote = Some(c),
+                (None, '[' | '{') => {
+                    open += 1;
+                    depth = depth.max(open + key.matches('.').count() + 1);
+                }
+                (None, ']' | '}') => open = open.saturating_sub(1),
+                _ => {}
+            }
+        }
+        if depth > best_depth {
+            (best, best_depth) = (start, depth);
+        }
+        start += line.len();
+    }
+    best..best
+}
+
 /// Parse a TOML document. On a syntax error returns the message and the byte
 /// range it concerns.
 pub fn parse(src: &str) -> Result<Node, (String, Option<Range<usize>>)> {
-    let val: Val = toml::from_str(src).map_err(|e| (toml_message(e.message()), e.span()))?;
+    let val: Val = toml::from_str(src).map_err(|e| {
+        let msg = toml_message(e.message());
+        // The deserializer's recursion limit comes without a position: point
+        // at the most deeply nested line, where the nesting is.
+        let span = match e.span() {
+            None if msg.ends_with(TOO_DEEP) => Some(deepest_line(src)),
+            s => s,
+        };
+        (msg, span)
+    })?;
     Ok(Node {
         origin: Origin::File(0..src.len()),
         value: val,
@@ -317,7 +373,7 @@ fn toml_message(raw: &str) -> String {
     } else if msg.starts_with(OUT_OF_RANGE) {
         msg.to_string()
     } else if msg.contains("recursion limit") || msg.contains("cannot recurse further") {
-        "TOML syntax error: values are nested too deeply".to_string()
+        format!("TOML syntax error: {TOO_DEEP}")
     } else if msg == "integer too large" {
         format!(
             "{OUT_OF_RANGE}is out of range: integers must be between {} and {}",

@@ -332,6 +332,11 @@ fn structure_cases() -> Vec<Case> {
         edit("integer_beyond_64_bits", "width = 8", "width = 99999999999999999999", &["scene.toml:2:9", "the integer 99999999999999999999 is out of range", "between -9223372036854775808 and 9223372036854775807"]).refuse(&["i128", "TOML syntax error"]),
         edit("negative_integer_beyond_64_bits", "radius = 1.0", "radius = -9223372036854775809", &["scene.toml:23:10", "the integer -9223372036854775809 is out of range"]).refuse(&["i128"]),
         edit("nesting_too_deep", "width = 8", &format!("width = {}{}", "[".repeat(300), "]".repeat(300)), &["scene.toml:2:", "nested too deeply"]),
+        // A table header 10,000 keys deep: the error is at its line, in the
+        // scene and in a file it includes.
+        edit("header_nested_too_deep", "[objects.tri]", &format!("[{}x]\nk = 1\n[objects.tri]", "x.".repeat(10_000)), &["scene.toml:25:1: TOML syntax error: values are nested too deeply"]),
+        scene("header_nested_too_deep_in_an_include", format!("include = \"deep.toml\"\n{GOOD}"), &["deep.toml:3:1: TOML syntax error: values are nested too deeply"])
+            .with(Extra::Bytes("deep.toml", format!("[shaders.s]\nclass = \"flat\"\n[{}x]\nk = 1\n", "x.".repeat(10_000)).into_bytes())),
         scene("empty_file", "", &["scene.toml", "missing section [render]"]),
         scene("render_not_a_table", "render = 5\n", &["scene.toml:1:10", "render: expected a table, found an integer"]),
         scene("section_not_a_table", "objects = 3\n[render]\nroot = \"x\"\n", &["scene.toml:1:11: objects: expected a table, found an integer"]),
