@@ -92,6 +92,7 @@ Checks by kind (docs/plugins.md has the details):
               deterministic, concurrent-queries
   lights      finite, delta-light, points-on-light (delta lights); at-infinity,
               li-matches-le, pdf-matches-sample, pdf-integrates (environment lights);
+              pdf-matches-hit (area lights, on an emitting ball);
               deterministic, concurrent-queries, stream-parity
   integrators finite, furnace, black-without-light, deterministic, concurrent-queries,
               stream-parity
@@ -186,7 +187,8 @@ pub(crate) fn note(slot: &mut (u64, String), msg: impl FnOnce() -> String) {
 pub(crate) struct Suite {
     pub checks: Vec<Check>,
     phase: &'static str,
-    skip: Vec<String>,
+    /// Checks not to run, and why (`--skip`, or the README's `conform` block).
+    skip: Vec<(String, String)>,
 }
 
 impl Suite {
@@ -201,8 +203,8 @@ impl Suite {
     /// Whether `name` is to be run (not named by --skip); when not, its
     /// `skip` line is added.
     pub fn wants(&mut self, name: &'static str) -> bool {
-        if self.skip.iter().any(|s| s == name) {
-            self.checks.push(Check::skip(name, "--skip"));
+        if let Some((_, why)) = self.skip.iter().find(|(s, _)| s == name) {
+            self.checks.push(Check::skip(name, why.clone()));
             return false;
         }
         true
@@ -577,11 +579,16 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
     extra.extend(a.plugin_path.iter().cloned());
     let bench = Bench::new(size, &extra, pool)?;
     check_object_flags(&a, kind, &class, &extra)?;
+    let readme = ReadmeConform::parse(&plugin.doc, &class, folder.path())?;
+    let params = match (&a.params, &readme.params) {
+        (None, Some(p)) => p.clone(),
+        _ => Params::parse(a.params.as_deref(), "--params")?,
+    };
     let mut cx = Cx {
         args: &a,
         class: class.clone(),
         kind,
-        params: Params::parse(a.params.as_deref(), "--params")?,
+        params,
         oracle_params: Params::parse(a.oracle_params.as_deref(), "--oracle-params")?,
         children: a
             .children
@@ -595,13 +602,25 @@ pub fn run(a: ConformArgs, pool: &rayon::ThreadPool) -> Result<()> {
         quick: a.quick,
         doc: plugin.doc,
     };
+    let mut skip: Vec<(String, String)> = a
+        .skip
+        .iter()
+        .map(|s| (s.clone(), "--skip".into()))
+        .collect();
+    skip.extend(readme.skip.iter().cloned());
     let mut suite = Suite {
         checks: Vec::new(),
         phase: "create",
-        skip: a.skip.clone(),
+        skip: skip.clone(),
     };
+    if let (None, Some(p)) = (&a.params, &readme.params) {
+        suite.push(Check::pass(
+            "params",
+            format!("none given; the README's conform block: {}", p.shown()),
+        ));
+    }
     let label = run_suite(kind, plugin.shader_module, &mut cx, &mut suite)?;
-    apply_skips(&a, label, &mut suite)?;
+    apply_skips(&skip, label, &mut suite)?;
     report(&a, &class, label, &cx.params, suite.checks)
 }
 
@@ -720,22 +739,118 @@ fn run_suite(
 
 /// Every --skip must name a check of this suite (a misspelt one would
 /// silently run it); the checks it names are reported as skipped.
-fn apply_skips(a: &ConformArgs, label: &str, suite: &mut Suite) -> Result<()> {
-    for s in &a.skip {
+fn apply_skips(skip: &[(String, String)], label: &str, suite: &mut Suite) -> Result<()> {
+    for (s, why) in skip {
         if !suite.checks.iter().any(|c| c.name == s) {
             let names: Vec<&str> = suite.checks.iter().map(|c| c.name).collect();
+            let by = if why == "--skip" {
+                "--skip"
+            } else {
+                "the README's conform block: skip"
+            };
             bail!(
-                "--skip {s}: the {label} suite has no check of that name (its checks: {})",
+                "{by} {s}: the {label} suite has no check of that name (its checks: {})",
                 names.join(", ")
             );
         }
     }
     for c in suite.checks.iter_mut() {
-        if a.skip.iter().any(|s| s == c.name) && c.status != Status::Skip {
-            *c = Check::skip(c.name, "--skip");
+        if let Some((_, why)) = skip.iter().find(|(s, _)| s == c.name) {
+            if c.status != Status::Skip {
+                *c = Check::skip(c.name, why.clone());
+            }
         }
     }
     Ok(())
+}
+
+/// What a plugin's README tells the suite, in a fenced block whose info
+/// string is `conform` (TOML): `params`, the parameters to use when none
+/// are given (relative `file` paths resolve against the block's `files`);
+/// `files`, a table of file names and contents the suite writes for them
+/// (a tiny mesh for a class that needs one); `skip`, checks that do not
+/// apply to the class, each with the reason the report prints. So a
+/// plugin passes its suite with no arguments, saying why where a check
+/// does not fit it (`normals` estimates no radiance), and a third-party
+/// plugin can do the same in its own README.
+#[derive(Default)]
+struct ReadmeConform {
+    params: Option<Params>,
+    skip: Vec<(String, String)>,
+}
+
+impl ReadmeConform {
+    /// The first `conform` block of `doc`, its files written into `dir`.
+    fn parse(doc: &str, class: &str, dir: &Path) -> Result<ReadmeConform> {
+        let Some(text) = fenced_block(doc, "conform") else {
+            return Ok(ReadmeConform::default());
+        };
+        let bad = |m: String| anyhow::anyhow!("`{class}`'s README, its conform block: {m}");
+        let mut t: toml::Table = toml::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        if let Some(files) = t.remove("files") {
+            let toml::Value::Table(files) = files else {
+                return Err(bad(
+                    "`files` must be a table of file names and contents".into()
+                ));
+            };
+            for (name, body) in files {
+                let ok_name = Path::new(&name).file_name().and_then(|f| f.to_str()) == Some(&name);
+                match body {
+                    toml::Value::String(b) if ok_name => std::fs::write(dir.join(&name), b)
+                        .with_context(|| format!("writing {}", dir.join(&name).display()))?,
+                    _ => return Err(bad(format!("files.{name}: a plain file name and its text"))),
+                }
+            }
+        }
+        let params = match t.remove("params") {
+            None => None,
+            Some(toml::Value::Table(table)) => {
+                let mut p = Params { table };
+                p.resolve_files(dir)?;
+                Some(p)
+            }
+            Some(_) => return Err(bad("`params` must be a table".into())),
+        };
+        let skip = match t.remove("skip") {
+            None => Vec::new(),
+            Some(toml::Value::Table(s)) => s
+                .into_iter()
+                .map(|(k, v)| match v {
+                    toml::Value::String(why) => Ok((k, format!("the plugin's README: {why}"))),
+                    _ => Err(bad(format!("skip.{k}: give the reason as a string"))),
+                })
+                .collect::<Result<_>>()?,
+            Some(_) => {
+                return Err(bad(
+                    "`skip` must be a table of check names and reasons".into()
+                ))
+            }
+        };
+        if let Some(k) = t.keys().next() {
+            return Err(bad(format!("unknown key `{k}` (params, files, skip)")));
+        }
+        Ok(ReadmeConform { params, skip })
+    }
+}
+
+/// The text of the first fenced block of `doc` whose info string is `info`.
+fn fenced_block(doc: &str, info: &str) -> Option<String> {
+    let mut block: Option<String> = None;
+    for line in doc.lines() {
+        let t = line.trim();
+        match &mut block {
+            None if t.strip_prefix("```").map(str::trim) == Some(info) => {
+                block = Some(String::new())
+            }
+            Some(b) if t.starts_with("```") => return Some(std::mem::take(b)),
+            Some(b) => {
+                b.push_str(line);
+                b.push('\n');
+            }
+            None => {}
+        }
+    }
+    None
 }
 
 /// Print the checks (lines or JSON); an error when any failed.
