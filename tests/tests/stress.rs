@@ -8,7 +8,7 @@ use rtk_tests::*;
 /// fails here rather than passing silently.
 const CASES: &[&str] = &[
     "T1", "T2", "T3", "T4", "A1", "A2", "A3", "A4", "A5", "Q1", "Q2", "Q3", "S1", "S2", "S3", "S4",
-    "S5", "X1", "X2", "X3", "V1", "V2", "V3",
+    "S5", "X1", "X2", "X3", "V1", "V2", "V3", "I1", "I2", "I3",
 ];
 
 fn stress(args: &[&str]) {

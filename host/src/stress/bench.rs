@@ -29,6 +29,8 @@ pub enum Target {
     Zero,
     /// A rate or error that must not exceed the bound.
     AtMost(f64),
+    /// A share that must reach the bound (what a case covers).
+    AtLeast(f64),
 }
 
 impl fmt::Display for Target {
@@ -36,6 +38,7 @@ impl fmt::Display for Target {
         match self {
             Target::Zero => write!(f, "0"),
             Target::AtMost(x) => write!(f, "<= {x:.3e}"),
+            Target::AtLeast(x) => write!(f, ">= {x:.3e}"),
         }
     }
 }
@@ -74,6 +77,7 @@ impl Line {
         match self.target {
             Target::Zero => self.value == 0.0,
             Target::AtMost(b) => self.value <= b,
+            Target::AtLeast(b) => self.value >= b,
         }
     }
 

@@ -19,6 +19,7 @@
 mod aggregates;
 mod bench;
 mod hygiene;
+mod integrators;
 mod mirrors;
 mod quadrics;
 mod spawn;
@@ -65,9 +66,8 @@ pub struct Case {
     pub run: fn(&mut Bench) -> Result<Vec<Line>>,
 }
 
-/// Every case, in the catalogue's order. Cases whose object classes or
-/// integrators do not exist yet (patches, motion, CSG, the path tracer's
-/// furnaces) are absent, not stubbed: docs/numerics.md lists them.
+/// Every case, in the catalogue's order. Cases whose object classes do not
+/// exist yet (patches) are absent, not stubbed: docs/numerics.md lists them.
 pub const CASES: &[Case] = &[
     triangles::T1,
     triangles::T2,
@@ -92,6 +92,9 @@ pub const CASES: &[Case] = &[
     hygiene::V1,
     hygiene::V2,
     hygiene::V3,
+    integrators::I1,
+    integrators::I2,
+    integrators::I3,
 ];
 
 /// Run `rtk stress`.
