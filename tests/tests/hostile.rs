@@ -752,3 +752,36 @@ fn threads_beyond_the_address_space_limit_are_reduced_with_a_warning() {
         "the image depends on the thread count"
     );
 }
+
+/// A run killed while writing leaves its temporary (`.NAME.PID.tmp`, beside
+/// the target); the next run writing that target removes it, and leaves a
+/// live process's temporary alone (a pid above Linux's largest is never
+/// alive; the test's own is).
+#[test]
+#[cfg(target_os = "linux")]
+fn a_killed_runs_temporary_is_removed_by_the_next_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    let stale = dir.path().join(".out.exr.4194305.tmp");
+    let live = dir
+        .path()
+        .join(format!(".out.exr.{}.tmp", std::process::id()));
+    std::fs::write(&stale, b"half an image").unwrap();
+    std::fs::write(&live, b"being written").unwrap();
+    let scene = root().join("scenes/sphere-normals.toml");
+    let r = Run::from(
+        rtk(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap(),
+    );
+    assert!(r.ok, "{}", r.stderr);
+    assert!(out.is_file());
+    assert!(!stale.exists(), "the stale temporary is still there");
+    assert!(live.exists(), "a live process's temporary was removed");
+}

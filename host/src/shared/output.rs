@@ -77,6 +77,35 @@ pub fn check_can_create(path: &Path, what: &str) -> Result<()> {
     }
 }
 
+/// Remove the temporaries `.NAME.PID.tmp` beside `path` whose process is
+/// gone (a run killed while writing): best effort, where `/proc` tells
+/// which processes live; a live process's temporary is never touched.
+fn remove_stale_temporaries(path: &Path) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+        return;
+    };
+    let prefix = format!(".{name}.");
+    let Ok(entries) = std::fs::read_dir(parent(path)) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let pid = file
+            .strip_prefix(&prefix)
+            .and_then(|r| r.strip_suffix(".tmp"))
+            .and_then(|p| p.parse::<u32>().ok());
+        if let Some(pid) = pid {
+            let gone = pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists();
+            if gone && e.file_type().is_ok_and(|t| t.is_file()) {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+}
+
 /// A hidden file beside `path` for this process: `.NAME.PID.KIND`.
 fn temp_path(path: &Path, kind: &str) -> PathBuf {
     let name = path
@@ -148,9 +177,16 @@ pub fn write(film: &Film, path: &Path) -> Result<()> {
 
 /// Write `path` atomically: `fill` writes a temporary file beside it, which
 /// is renamed into place only if `fill` succeeds (and removed otherwise).
+/// The temporary is flushed to the disk before the rename, so that after a
+/// crash the target holds the old file or the whole new one. Temporaries of
+/// `path` that a killed run left behind are removed first.
 pub fn write_atomically(path: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    remove_stale_temporaries(path);
     let tmp = temp_path(path, "tmp");
-    let res = fill(&tmp).and_then(|()| Ok(std::fs::rename(&tmp, path)?));
+    let res = fill(&tmp).and_then(|()| {
+        std::fs::File::open(&tmp)?.sync_all()?;
+        Ok(std::fs::rename(&tmp, path)?)
+    });
     if res.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
