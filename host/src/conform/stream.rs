@@ -70,6 +70,13 @@ impl Batch {
     fn asks(&self, lane: usize) -> bool {
         lane < self.n && (self.active >> lane) & 1 == 1
     }
+    /// An output per lane: `fresh` for the lanes asked, `sentinel` (which
+    /// must survive the call) for the others.
+    fn outputs<T>(&self, fresh: impl Fn() -> T, sentinel: impl Fn() -> T) -> Vec<T> {
+        (0..self.n)
+            .map(|i| if self.asks(i) { fresh() } else { sentinel() })
+            .collect()
+    }
 }
 
 /// 64 random bits.
@@ -334,15 +341,7 @@ fn intersect_lanes(
     s: &Singles,
     e: &mut Entry,
 ) -> Result<()> {
-    let mut hits: Vec<Hit> = (0..b.n)
-        .map(|i| {
-            if b.asks(i) {
-                Hit::new()
-            } else {
-                hit_sentinel()
-            }
-        })
-        .collect();
+    let mut hits = b.outputs(Hit::new, hit_sentinel);
     let Some(got) = obj.intersect_batch(ctx, rays, &mut hits, b.active, b.level) else {
         return Ok(());
     };
@@ -451,16 +450,8 @@ fn geom_lanes(
         obj.local_geom(ctx, &rays[i], &hits[i], b.level, b.geom, &mut want[i]);
         failed(ctx)?;
     }
-    let mut out: Vec<LocalGeom> = (0..b.n)
-        .map(|i| {
-            if (active >> i) & 1 == 1 {
-                LocalGeom::EMPTY
-            } else {
-                geom_sentinel()
-            }
-        })
-        .collect();
     let g = Batch { active, ..*b };
+    let mut out = g.outputs(|| LocalGeom::EMPTY, geom_sentinel);
     if obj
         .local_geom_batch(ctx, rays, &hits, active, b.level, b.geom, &mut out)
         .is_none()
@@ -591,15 +582,7 @@ fn light_lanes(
     let p: Vec<Float3> = qs.iter().map(|q| q.p.into()).collect();
     let u: Vec<[f32; 2]> = qs.iter().map(|q| q.u).collect();
     let time: Vec<f32> = qs.iter().map(|q| q.time).collect();
-    let mut out: Vec<LightSample> = (0..b.n)
-        .map(|i| {
-            if b.asks(i) {
-                LightSample::default()
-            } else {
-                sample_sentinel()
-            }
-        })
-        .collect();
+    let mut out = b.outputs(LightSample::default, sample_sentinel);
     let Some(got) = l.sample_li_batch(ctx, &p, &u, &time, b.active, &mut out) else {
         return Ok(());
     };
