@@ -128,41 +128,7 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
     } else {
         suite.push(Check::held("finite", &t.bad, nq, "queries"));
     }
-    if env {
-        environment_checks(cx, suite, light, &mut ctx, &t);
-    } else if area {
-        suite.at("pdf-matches-hit");
-        suite.push(pdf_matches_hit(
-            &w,
-            light,
-            &mut ctx,
-            &queries[..n.min(2000)],
-        )?);
-        let why = "an area light (its instance's surface), not a delta or an environment light";
-        for c in [
-            "delta-light",
-            "points-on-light",
-            "at-infinity",
-            "li-matches-le",
-            "pdf-matches-sample",
-            "pdf-integrates",
-        ] {
-            suite.push(Check::skip(c, why));
-        }
-    } else {
-        suite.push(Check::held("delta-light", &t.delta, t.lit, "samples"));
-        suite.at("points-on-light");
-        suite.push(points_on_light(light, &mut ctx, &queries[..n.min(1000)])?);
-        let why = "a delta light (no `le`): rays cannot find it";
-        for c in [
-            "at-infinity",
-            "li-matches-le",
-            "pdf-matches-sample",
-            "pdf-integrates",
-        ] {
-            suite.push(Check::skip(c, why));
-        }
-    }
+    kind_checks(cx, suite, (&w, light), &mut ctx, (&t, &queries), area)?;
 
     suite.at("deterministic");
     suite.push(deterministic(light, &mut ctx, &queries, &results)?);
@@ -180,6 +146,59 @@ pub(crate) fn checks(cx: &mut Cx, suite: &mut Suite) -> Result<()> {
     let c = unknown_key(cx, 0);
     suite.push(c);
     super::panics::run(cx, suite, 0)?;
+    Ok(())
+}
+
+/// The checks of the light's kind: an environment light's, an area
+/// light's (on the emitting ball of `w`), or a delta light's; the other
+/// kinds' checks reported as skipped.
+fn kind_checks(
+    cx: &mut Cx,
+    suite: &mut Suite,
+    (w, light): (&rtk_shell::World, &Light),
+    ctx: &mut TraceCtx,
+    (t, queries): (&Tallies, &[Query]),
+    area: bool,
+) -> Result<()> {
+    if light.is_environment() {
+        environment_checks(cx, suite, light, ctx, t);
+    } else if area {
+        suite.at("pdf-matches-hit");
+        suite.push(pdf_matches_hit(
+            w,
+            light,
+            ctx,
+            &queries[..queries.len().min(2000)],
+        )?);
+        let why = "an area light (its instance's surface), not a delta or an environment light";
+        for c in [
+            "delta-light",
+            "points-on-light",
+            "at-infinity",
+            "li-matches-le",
+            "pdf-matches-sample",
+            "pdf-integrates",
+        ] {
+            suite.push(Check::skip(c, why));
+        }
+    } else {
+        suite.push(Check::held("delta-light", &t.delta, t.lit, "samples"));
+        suite.at("points-on-light");
+        suite.push(points_on_light(
+            light,
+            ctx,
+            &queries[..queries.len().min(1000)],
+        )?);
+        let why = "a delta light (no `le`): rays cannot find it";
+        for c in [
+            "at-infinity",
+            "li-matches-le",
+            "pdf-matches-sample",
+            "pdf-integrates",
+        ] {
+            suite.push(Check::skip(c, why));
+        }
+    }
     Ok(())
 }
 

@@ -191,6 +191,30 @@ fn plane_under_a_black_ball_matches_the_form_factor(b: &mut Bench) -> Result<Vec
         vec3(c.to_array()),
     ))?;
     let film = b.render(&world)?;
+    let (exact, plane_pixels) = expected_pixels(&world, size, (c, r, half));
+    let (z, compared) = z_of(&film, |i| exact[i]);
+    Ok(vec![
+        z_line(
+            format!("plane, ball r 1 h 1, {compared} px ({plane_pixels} plane) x {spp}"),
+            z,
+        ),
+        Line::new(
+            format!("plane pixels of {size}^2"),
+            "share of the image",
+            plane_pixels as f64 / (size * size) as f64,
+            Target::AtLeast(0.3),
+        ),
+    ])
+}
+
+/// I3's expectation per pixel of a `size`² image of `world` (`None` where
+/// the pixel's corners see different things), and how many pixels see the
+/// plane; the ball is `(centre, radius)`, the plane's half-width `half`.
+fn expected_pixels(
+    world: &rtk_shell::World,
+    size: usize,
+    (c, r, half): (DVec3, f64, f64),
+) -> (Vec<Option<f64>>, u64) {
     let mut ctx = TraceCtx::new(0, 1, 0);
     let mut look = |x: f64, y: f64| -> Seen {
         let s = CameraSample {
@@ -231,17 +255,5 @@ fn plane_under_a_black_ball_matches_the_form_factor(b: &mut Bench) -> Result<Vec
             });
         }
     }
-    let (z, compared) = z_of(&film, |i| exact[i]);
-    Ok(vec![
-        z_line(
-            format!("plane, ball r 1 h 1, {compared} px ({plane_pixels} plane) x {spp}"),
-            z,
-        ),
-        Line::new(
-            format!("plane pixels of {size}^2"),
-            "share of the image",
-            plane_pixels as f64 / (size * size) as f64,
-            Target::AtLeast(0.3),
-        ),
-    ])
+    (exact, plane_pixels)
 }

@@ -112,25 +112,7 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     if let Some(p) = &a.save_rays {
         rays::write_rays(p, &rays)?;
     }
-    let mut times = Vec::new();
-    let mut stats = Stats::default();
-    // Query ids must never repeat on a thread, across passes too (mailboxes
-    // are keyed by them): each thread's counter lives for the whole run.
-    let next_query: Vec<AtomicU64> = (0..pool.current_num_threads())
-        .map(|_| AtomicU64::new(0))
-        .collect();
-    // One hit record per ray, written in place by every pass (as the Embree
-    // anchor writes its arrays): the timing is the tracing's alone.
-    let mut hits = vec![HitRec::MISS; rays.len()];
-    for _ in 0..a.iters {
-        let t = Instant::now();
-        let q = Query {
-            occluded: a.occluded,
-            stream: a.stream,
-        };
-        stats = trace_all(&world, &rays, q, pool, &next_query, &mut hits)?;
-        times.push(t.elapsed().as_secs_f64());
-    }
+    let (mut times, stats, hits) = time_passes(&a, &world, &rays, pool)?;
     let passes = times.clone();
     times.sort_by(f64::total_cmp);
     let secs = times[times.len() / 2];
@@ -157,6 +139,36 @@ pub fn run(a: TraceArgs, pool: &rayon::ThreadPool, parallel: &dyn Parallel) -> R
     };
     report.print(a.json);
     Ok(())
+}
+
+/// `--iters` timed passes over `rays`: each pass's seconds, the counters
+/// of the last, and the hit records (one per ray, written in place by
+/// every pass, as the Embree anchor writes its arrays: the timing is the
+/// tracing's alone).
+fn time_passes(
+    a: &TraceArgs,
+    world: &World,
+    rays: &[RayRec],
+    pool: &rayon::ThreadPool,
+) -> Result<(Vec<f64>, Stats, Vec<HitRec>)> {
+    let mut times = Vec::new();
+    let mut stats = Stats::default();
+    // Query ids must never repeat on a thread, across passes too (mailboxes
+    // are keyed by them): each thread's counter lives for the whole run.
+    let next_query: Vec<AtomicU64> = (0..pool.current_num_threads())
+        .map(|_| AtomicU64::new(0))
+        .collect();
+    let mut hits = vec![HitRec::MISS; rays.len()];
+    let q = Query {
+        occluded: a.occluded,
+        stream: a.stream,
+    };
+    for _ in 0..a.iters {
+        let t = Instant::now();
+        stats = trace_all(world, rays, q, pool, &next_query, &mut hits)?;
+        times.push(t.elapsed().as_secs_f64());
+    }
+    Ok((times, stats, hits))
 }
 
 /// The world to trace: the scene, or a generated one over the mesh.
