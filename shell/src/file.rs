@@ -26,6 +26,27 @@ pub struct SceneFile {
     /// The files `include` named, as resolved, with where each is named
     /// (`--safe` checks them).
     pub includes: Vec<(PathBuf, Origin)>,
+    /// Arrays a host attached to definitions (the Python module's meshes
+    /// from NumPy), by definition path (`objects.bunny`): handed to that
+    /// definition's `create` by pointer ([`rtk_handles::Bulk`]), never as
+    /// text. Empty for a scene read from files.
+    pub arrays: std::collections::BTreeMap<String, Vec<AttachedArray>>,
+}
+
+/// An array a host attached to a definition: a C-order `rows × cols` block
+/// of `rtk_abi::bulk_dtype` elements in native byte order.
+#[derive(Debug, Clone)]
+pub struct AttachedArray {
+    /// The parameter it stands for (`vertices`, `indices`).
+    pub name: String,
+    /// An `rtk_abi::bulk_dtype` code.
+    pub dtype: u32,
+    /// Number of rows.
+    pub rows: u64,
+    /// Number of columns.
+    pub cols: u64,
+    /// The elements' bytes.
+    pub data: Vec<u8>,
 }
 
 impl SceneFile {
@@ -143,6 +164,7 @@ impl SceneFile {
                 text,
                 root,
                 includes: Vec::new(),
+                arrays: Default::default(),
             }),
             Err((msg, span)) => Err(SceneError::new(
                 ErrorKind::Syntax,

@@ -85,6 +85,7 @@ fn create(module: ShaderModuleRef, cx: &mut Cx, suite: &mut Suite) -> Result<Sha
         image_width: 1,
         image_height: 1,
         origin: [0.0; 3],
+        arrays: &[],
     };
     let class = cx.class.clone();
     Ok(match Shader::create(module, &cx.params.json(), &args) {

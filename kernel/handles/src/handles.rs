@@ -14,6 +14,23 @@ use rtk_sdk::{LiveCamera, LiveIntegrator, LiveLight, LiveObject, LiveShader, Sce
 use std::ffi::c_void;
 use std::sync::Arc;
 
+/// A named array a host hands to `create` by pointer ([`BulkArray`]): a
+/// C-order `rows × cols` block of [`bulk_dtype`] elements. The host owns the
+/// bytes; they need only outlive the `create` call.
+#[derive(Debug, Clone, Copy)]
+pub struct Bulk<'a> {
+    /// The parameter it stands for (`vertices`, `indices`).
+    pub name: &'a str,
+    /// A [`bulk_dtype`].
+    pub dtype: u32,
+    /// Number of rows.
+    pub rows: u64,
+    /// Number of columns.
+    pub cols: u64,
+    /// `rows * cols` elements, native byte order.
+    pub data: &'a [u8],
+}
+
 /// What `create` receives besides the parameters.
 #[derive(Debug, Clone, Copy)]
 pub struct CreateArgs<'a> {
@@ -27,13 +44,29 @@ pub struct CreateArgs<'a> {
     pub image_height: u32,
     /// The world point the renderer computes about ([`CreateEnv::origin`]).
     pub origin: [f64; 3],
+    /// Arrays passed by pointer (meshes from NumPy); empty for a scene file.
+    pub arrays: &'a [Bulk<'a>],
 }
 
 impl CreateArgs<'_> {
-    /// The record; its pointers are valid while `self` is borrowed.
-    fn raw(&self) -> CreateEnv {
+    /// The arrays' records, which `raw` points at.
+    fn raw_arrays(&self) -> Vec<BulkArray> {
+        self.arrays
+            .iter()
+            .map(|b| BulkArray {
+                name: Span::of(b.name.as_bytes()),
+                dtype: b.dtype,
+                rows: b.rows,
+                cols: b.cols,
+                data: b.data.as_ptr(),
+            })
+            .collect()
+    }
+
+    /// The record; its pointers are valid while `self` and `arrays` are borrowed.
+    fn raw(&self, arrays: &[BulkArray]) -> CreateEnv {
         CreateEnv {
-            arrays: Span::of(&[]),
+            arrays: Span::of(arrays),
             scene_dir: self.scene_dir.as_ptr(),
             scene_dir_len: self.scene_dir.len(),
             name: self.name.as_ptr(),
@@ -52,7 +85,8 @@ fn created(
     class: &'static str,
     call: impl FnOnce(&CreateEnv, ErrSink) -> *mut c_void,
 ) -> Result<*mut c_void, CallError> {
-    let env = args.raw();
+    let arrays = args.raw_arrays();
+    let env = args.raw(&arrays);
     let mut c = Collected::default();
     let this = call(&env, c.sink());
     if this.is_null() {

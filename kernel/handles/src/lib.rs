@@ -23,7 +23,7 @@
 mod handles;
 mod services;
 
-pub use handles::{Camera, CreateArgs, Integrator, Light, Object, ObjectBuilder, Shader};
+pub use handles::{Bulk, Camera, CreateArgs, Integrator, Light, Object, ObjectBuilder, Shader};
 pub use services::{PrepareServices, SceneRecord, Services, ServicesTable};
 
 pub use rtk_sdk::sink::CallError;

@@ -46,6 +46,7 @@
 
 pub mod analytic;
 pub mod batch;
+pub mod bulk;
 pub mod camera;
 mod child;
 mod conv;
@@ -138,6 +139,9 @@ pub struct Env<'a> {
     /// f64 before the one rounding to f32 gives what the camera sees the
     /// precision of a scene at the origin (docs/numerics.md X3).
     pub origin: [f64; 3],
+    /// Arrays the host passed by pointer instead of as parameters (meshes
+    /// from NumPy): empty for definitions read from a scene file.
+    pub arrays: bulk::Arrays<'a>,
 }
 
 impl Env<'_> {

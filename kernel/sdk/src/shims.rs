@@ -210,6 +210,9 @@ pub unsafe fn env_of<'a>(env: &'a CreateEnv) -> Env<'a> {
         image_width: env.image_width,
         image_height: env.image_height,
         origin: env.origin,
+        // SAFETY: the caller's contract covers the arrays: the host builds
+        // each record from bytes it holds for the whole call.
+        arrays: unsafe { crate::bulk::Arrays::from_raw(env.arrays.as_slice()) },
     }
 }
 

@@ -165,6 +165,7 @@ mod tests {
             image_width: 1,
             image_height: 1,
             origin: [0.0; 3],
+            arrays: Default::default(),
         }
     }
 

@@ -23,6 +23,8 @@ enum Normals {
 #[derive(Deserialize)]
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
+    /// Empty when the host passes the mesh as arrays ([`Env::arrays`]).
+    #[serde(default)]
     file: String,
     #[serde(default = "auto")]
     normals: Normals,
@@ -32,8 +34,16 @@ fn auto() -> Normals {
     Normals::Auto
 }
 
+/// Where the triangles come from: a file read at `prepare`, or the host's
+/// arrays, copied (and placed at the origin) in `create`, since they are
+/// lent only for that call.
+enum Source {
+    File(PathBuf),
+    Arrays(Option<load::MeshData>),
+}
+
 struct Mesh {
-    path: PathBuf,
+    source: Source,
     /// The renderer's origin (`Env::origin`), subtracted from the file's
     /// vertices when they are read.
     origin: [f64; 3],
@@ -131,21 +141,19 @@ impl Plugin for Mesh {
     type Params = Params;
 
     fn create(p: Params, env: &Env) -> Result<Self, PluginError> {
-        if p.file.is_empty() {
-            return Err(PluginError::key("file", "must name a .ply or .obj file"));
-        }
-        let ext = std::path::Path::new(&p.file)
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        if !matches!(ext.as_deref(), Some("ply") | Some("obj")) {
-            return Err(PluginError::key(
-                "file",
-                format!("{}: unknown mesh format: use .ply or .obj", p.file),
-            ));
-        }
+        let source = if env.arrays.get("vertices").is_some() {
+            if !p.file.is_empty() {
+                return Err(PluginError::key(
+                    "file",
+                    "give the mesh as a file or as arrays (vertices, indices), not both",
+                ));
+            }
+            Source::Arrays(Some(from_arrays(env)?))
+        } else {
+            Source::File(file_param(&p.file, env)?)
+        };
         Ok(Mesh {
-            path: env.resolve(&p.file),
+            source,
             origin: env.origin,
             normals_mode: p.normals,
             p: vec![],
@@ -159,6 +167,74 @@ impl Plugin for Mesh {
             solid: std::sync::OnceLock::new(),
         })
     }
+}
+
+/// The `file` parameter resolved, once its format is known.
+fn file_param(file: &str, env: &Env) -> Result<PathBuf, PluginError> {
+    if file.is_empty() {
+        return Err(PluginError::key(
+            "file",
+            "must name a .ply or .obj file (or the host must pass vertices and indices arrays)",
+        ));
+    }
+    let ext = std::path::Path::new(file)
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(ext.as_deref(), Some("ply") | Some("obj")) {
+        return Err(PluginError::key(
+            "file",
+            format!("{file}: unknown mesh format: use .ply or .obj"),
+        ));
+    }
+    Ok(env.resolve(file))
+}
+
+/// Rows rounded to f32 (normals and texture coordinates do not move).
+fn narrow<const N: usize>(v: Vec<[f64; N]>) -> Vec<[f32; N]> {
+    v.into_iter().map(|r| r.map(|c| c as f32)).collect()
+}
+
+/// The mesh the host passed as arrays: `vertices` (V x 3, f32 or f64, placed
+/// at the renderer's origin in f64 and rounded once), `indices` (F x 3, any
+/// integer type), optional `normals` (V x 3) and `uvs` (V x 2).
+fn from_arrays(env: &Env) -> Result<load::MeshData, PluginError> {
+    let known = ["vertices", "indices", "normals", "uvs"];
+    if let Some(n) = env.arrays.names().find(|n| !known.contains(n)) {
+        return Err(PluginError::key(
+            n,
+            "unknown array: a mesh takes vertices, indices, normals and uvs",
+        ));
+    }
+    let array = |name: &str| env.arrays.get(name);
+    let vertices = array("vertices").expect("checked by the caller");
+    let world = vertices.rows_f64::<3>()?;
+    if let Some((i, v)) = world
+        .iter()
+        .enumerate()
+        .find(|(_, v)| v.iter().any(|c| !c.is_finite()))
+    {
+        return Err(PluginError::key(
+            "vertices",
+            format!("row {i} is not finite: {v:?}"),
+        ));
+    }
+    let indices = array("indices")
+        .ok_or_else(|| PluginError::key("indices", "missing: F x 3 vertex indices"))?;
+    let bound = u32::try_from(world.len())
+        .map_err(|_| PluginError::key("vertices", "more than 2^32 - 1 vertices"))?;
+    let m = load::MeshData {
+        positions: world.iter().map(|&v| env.place(v).to_array()).collect(),
+        tris: indices.rows_index::<3>(bound)?,
+        normals: array("normals")
+            .map(|a| a.rows_f64::<3>().map(narrow))
+            .transpose()?,
+        uvs: array("uvs")
+            .map(|a| a.rows_f64::<2>().map(narrow))
+            .transpose()?,
+    };
+    load::validate(&m).map_err(|e| PluginError::key("vertices", e))?;
+    Ok(m)
 }
 
 impl Object for Mesh {
@@ -175,10 +251,14 @@ impl Object for Mesh {
     }
 
     fn prepare(&mut self, env: &Prepare) -> Result<(), PluginError> {
-        let bytes = load::read_file(env, &self.path)?;
-        let m = load::load(&self.path, &bytes)?;
+        let m = match &mut self.source {
+            Source::File(path) => load::load(path, &load::read_file(env, path)?)?,
+            // Placed at the origin already (in f64, from the host's values).
+            Source::Arrays(m) => m.take().ok_or_else(|| PluginError::msg("prepared twice"))?,
+        };
+        let placed = matches!(self.source, Source::Arrays(_));
         self.p = m.positions;
-        if self.origin != [0.0; 3] {
+        if self.origin != [0.0; 3] && !placed {
             // In f64, then rounded once: camera-relative rendering (X3).
             let o = self.origin;
             for v in &mut self.p {

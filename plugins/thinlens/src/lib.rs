@@ -170,6 +170,7 @@ mod tests {
             image_width: 64,
             image_height: 64,
             origin: [0.0; 3],
+            arrays: Default::default(),
         };
         let p = Params {
             eye: [0.0, 0.0, 5.0],
@@ -239,6 +240,7 @@ mod tests {
             image_width: 4,
             image_height: 4,
             origin: [0.0; 3],
+            arrays: Default::default(),
         };
         let p = |a: f32, f: Option<f64>| Params {
             eye: [0.0, 0.0, 5.0],

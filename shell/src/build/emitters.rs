@@ -244,6 +244,7 @@ pub(crate) fn area_lights(
             image_width: desc.render.width,
             image_height: desc.render.height,
             origin: desc.render.origin,
+            arrays: &[],
         };
         let mut light = Light::create(module, "{}", &args).map_err(failed)?;
         let shader = &shaders[e.inst.shader as usize];

@@ -25,6 +25,7 @@ use objects::{call_error, Builder};
 use prepare::PrepareHost;
 use rtk_handles::{Camera, Integrator, Light, Object, Shader};
 use rtk_kernel::{Bounds3, InstanceData};
+use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -145,6 +146,7 @@ fn create_world(
         file.dir().to_string_lossy().into_owned(),
         host,
     );
+    b.arrays = attached_arrays(file);
     b.accel = loaded.accel;
     let t1 = Instant::now();
     let Others {
@@ -319,4 +321,24 @@ fn create_def<T>(
         Some(r) => r.map_err(|e| call_error(def, None, "its parameters", e)),
         None => unreachable!("kinds were checked when loading"),
     }
+}
+
+/// The host's arrays of `file` as the views `create` lends by pointer.
+fn attached_arrays(file: &SceneFile) -> BTreeMap<String, Vec<rtk_handles::Bulk<'_>>> {
+    file.arrays
+        .iter()
+        .map(|(path, list)| {
+            let views = list
+                .iter()
+                .map(|a| rtk_handles::Bulk {
+                    name: &a.name,
+                    dtype: a.dtype,
+                    rows: a.rows,
+                    cols: a.cols,
+                    data: &a.data,
+                })
+                .collect();
+            (path.clone(), views)
+        })
+        .collect()
 }

@@ -18,7 +18,7 @@ use crate::desc::{Def, Desc, Instance, ObjDef};
 use crate::error::{ErrorKind, SceneError};
 use crate::plugins::{Module, Registry};
 use crate::tree::Node;
-use rtk_handles::{CallError, CreateArgs, Object, ObjectBuilder, Shader};
+use rtk_handles::{Bulk, CallError, CreateArgs, Object, ObjectBuilder, Shader};
 use rtk_kernel::abi::ObjectModuleRef;
 use rtk_kernel::InstanceData;
 use std::collections::{BTreeMap, HashMap};
@@ -37,6 +37,10 @@ pub(crate) struct Builder<'a> {
     pub desc: &'a Desc,
     pub registry: &'a Registry,
     pub scene_dir: String,
+    /// The host's arrays by definition path ([`SceneFile::arrays`]).
+    ///
+    /// [`SceneFile::arrays`]: crate::SceneFile::arrays
+    pub arrays: BTreeMap<String, Vec<Bulk<'a>>>,
     pub prepare_host: PrepareHost<'a>,
     /// Objects made, by (definition, shifted).
     made: HashMap<(String, bool), Object>,
@@ -71,6 +75,7 @@ impl<'a> Builder<'a> {
             desc,
             registry,
             scene_dir,
+            arrays: BTreeMap::new(),
             prepare_host,
             made: HashMap::new(),
             accel: BTreeMap::new(),
@@ -104,6 +109,7 @@ impl<'a> Builder<'a> {
             } else {
                 [0.0; 3]
             },
+            arrays: self.arrays.get(path).map_or(&[], Vec::as_slice),
         }
     }
 
