@@ -173,16 +173,35 @@ fn time_passes(
 
 /// The world to trace: the scene, or a generated one over the mesh.
 fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
-    let ext = a
-        .input
+    let (file, sets) = trace_input(&a.input, a.aggregate.as_deref())?;
+    if let Some(s) = a
+        .set
+        .iter()
+        .find(|s| s.split('=').next().map(str::trim) == Some("render.origin"))
+    {
+        bail!("--set {s}: rtk trace traces in world coordinates (ray files and ray sets are); render.origin cannot be set");
+    }
+    let sets = sets.into_iter().chain(a.set.iter().cloned()).collect();
+    build_world(file, sets, &a.plugin_path, parallel)
+}
+
+/// The scene `rtk trace` reads from `input`: a scene file, with its root's
+/// class replaced by `aggregate` if given, or a generated scene over a mesh
+/// file (.ply, .obj) under `aggregate` (`bvh` by default); and the `--set`s
+/// the replacement needs.
+pub(crate) fn trace_input(
+    input: &Path,
+    aggregate: Option<&str>,
+) -> Result<(rtk_shell::SceneFile, Vec<String>)> {
+    let ext = input
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let (file, sets) = match ext.as_deref() {
-        Some("ply") | Some("obj") => (mesh_scene(&a.input, a.aggregate.as_deref())?, vec![]),
+    Ok(match ext.as_deref() {
+        Some("ply") | Some("obj") => (mesh_scene(input, aggregate)?, vec![]),
         _ => {
-            let mut file = rtk_shell::SceneFile::read(&a.input)?;
-            let sets = match &a.aggregate {
+            let mut file = rtk_shell::SceneFile::read(input)?;
+            let sets = match aggregate {
                 Some(class) => {
                     let root = root_object(&file)?;
                     let dropped = keep_class_neutral_keys(&mut file, &root, class);
@@ -198,16 +217,7 @@ fn load_world(a: &TraceArgs, parallel: &dyn Parallel) -> Result<World> {
             };
             (file, sets)
         }
-    };
-    if let Some(s) = a
-        .set
-        .iter()
-        .find(|s| s.split('=').next().map(str::trim) == Some("render.origin"))
-    {
-        bail!("--set {s}: rtk trace traces in world coordinates (ray files and ray sets are); render.origin cannot be set");
-    }
-    let sets = sets.into_iter().chain(a.set.iter().cloned()).collect();
-    build_world(file, sets, &a.plugin_path, parallel)
+    })
 }
 
 /// Build the world of `file` with `sets` applied, in world coordinates.

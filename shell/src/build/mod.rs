@@ -65,6 +65,11 @@ pub struct World {
     pub environment: Option<usize>,
     /// The shaders, indexed by shader id.
     pub shaders: Vec<Shader>,
+    /// Each instance's path (`objects.world.children[2]`, `render.root`) by
+    /// its id, the `LocalGeom::instance` a hit on it reports (the innermost
+    /// instance wins; a definition instanced twice reports its children's
+    /// ids for both).
+    pub instances: Vec<String>,
     /// The plugins loaded for this scene.
     pub plugins: Vec<Arc<Plugin>>,
     /// Files plugins reported reading during `prepare`.
@@ -158,6 +163,7 @@ fn create_world(
     let root_inst = &desc.render.root;
     let root = b.instance(root_inst, false, true)?;
     let root_bind = b.bindings(root_inst)?;
+    let root_bind = b.named(root_bind, root_inst);
     let emitters = b.emitters(root_inst)?;
     let environment = environment(&desc, &lights)?;
     let bounds = root_bounds(&root, root_inst)?;
@@ -182,6 +188,7 @@ fn create_world(
         prepare_by_class: std::mem::take(&mut b.prepare_by_class),
     };
     let (shaders, objects_created) = (std::mem::take(&mut b.shaders), b.objects_created);
+    let instances = std::mem::take(&mut b.instances);
     drop(b);
     let world = World {
         desc,
@@ -193,6 +200,7 @@ fn create_world(
         lights,
         environment,
         shaders,
+        instances,
         plugins: loaded.plugins,
         files_read,
         timings,

@@ -57,6 +57,9 @@ pub(crate) struct Builder<'a> {
     /// after the scene's lights, in the order the bindings are made.
     light_of_binding: BTreeMap<u32, u32>,
     pub shaders: Vec<Shader>,
+    /// Path of each instance by its id (`InstanceData::id`): what a hit
+    /// reports as its object (`LocalGeom::instance`).
+    pub instances: Vec<String>,
     pub objects_created: usize,
     pub create_time: Duration,
     pub prepare_time: Duration,
@@ -84,6 +87,7 @@ impl<'a> Builder<'a> {
             emissive: Default::default(),
             light_of_binding: BTreeMap::new(),
             shaders: Vec::new(),
+            instances: Vec::new(),
             objects_created: 0,
             create_time: Duration::ZERO,
             prepare_time: Duration::ZERO,
@@ -247,7 +251,8 @@ impl<'a> Builder<'a> {
             shifted && !rtk_kernel::classes::PLACE_THEIR_CHILD.contains(&def.class.as_str());
         for inst in expand_groups(desc, &od.children) {
             let child = self.instance(&inst, flattens, children_shifted)?;
-            let data = self.bindings(&inst)?;
+            let bound = self.bindings(&inst)?;
+            let data = self.named(bound, &inst);
             let t = Instant::now();
             let added = b.add_child(&child, data);
             self.create_time += t.elapsed();
@@ -298,6 +303,13 @@ impl<'a> Builder<'a> {
             self.shader_ids.insert(key, id);
         }
         Ok(self.binding(id))
+    }
+
+    /// `data` with the next instance id, which names `inst`.
+    pub(crate) fn named(&mut self, data: InstanceData, inst: &Instance) -> InstanceData {
+        let id = self.instances.len() as u32;
+        self.instances.push(inst.path.clone());
+        InstanceData { id, ..data }
     }
 
     /// The bindings of shader id `id`: the shader, and its area light when it emits.
