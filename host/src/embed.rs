@@ -6,8 +6,8 @@
 //! owns its process (it writes files, prints, installs a Ctrl-C handler,
 //! exits), and an embedding host owns none of that. What both need is the
 //! code below them, which this module calls without copying: the scene is
-//! read and overridden as `rtk render --set` does ([`EmbeddedScene::from_file`]),
-//! rendered by the same [`render_loop`](crate::render::render_loop) (so the
+//! read and overridden as `rtk render --set` does ([`SceneSource::from_file`]),
+//! rendered by the same render loop (so the
 //! image is bit-identical to `rtk render`'s EXR), and rays are cast through
 //! the root's `intersect` exactly as `rtk trace` casts them (so `t`, `prim`
 //! and the barycentrics equal its hit file bit for bit).
@@ -15,7 +15,7 @@
 use crate::render::render_loop::{self, Accum, Control, Rect};
 use crate::render::tracer::Tracer;
 use crate::shared::threads::{self, Pool};
-use crate::trace::rays::RayRec;
+pub use crate::trace::rays::RayRec;
 use anyhow::{anyhow, bail, Context, Result};
 use rtk_kernel::abi::{geom_mask, Hit, LocalGeom, Ray, TraceCtx};
 use rtk_shell::file::AttachedArray;
@@ -561,4 +561,43 @@ impl TraceJob<'_> {
 /// ...]`), as the binary would, returning its error instead of exiting.
 pub fn run_command(args: &[String]) -> Result<()> {
     crate::cli::run_args(args).context("rtk")
+}
+
+/// Write linear RGB (`width * height * 3` values, row-major) to `path` as
+/// `rtk render` writes its output: PNG (sRGB, 8-bit) or EXR (linear float),
+/// atomically (nothing is left at `path` if writing fails).
+pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<()> {
+    if rgb.len() as u64 != width as u64 * height as u64 * 3 {
+        bail!(
+            "{}: the image must hold width x height x 3 values",
+            path.display()
+        );
+    }
+    crate::shared::output::check_writable(path)?;
+    let mut film = render_loop::Film::new(width, height).map_err(|m| anyhow!("{m}"))?;
+    for (p, c) in film.pixels.iter_mut().zip(rgb.chunks_exact(3)) {
+        *p = [c[0] as f64, c[1] as f64, c[2] as f64];
+    }
+    crate::shared::output::write(&film, path)
+}
+
+/// An image file (.exr, .pfm, .npy, .png) as `rtk diff` reads it:
+/// (width, height, linear RGB values).
+pub fn read_image(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
+    let img = crate::shared::images::read(path)?;
+    Ok((img.width, img.height, img.data))
+}
+
+/// `rtk diff`'s metrics of `img` against `reference` (same length):
+/// (RMSE, relMSE).
+pub fn image_error(img: &[f32], reference: &[f32]) -> Result<(f64, f64)> {
+    if img.len() != reference.len() {
+        bail!(
+            "the images differ in size ({} and {} values)",
+            img.len(),
+            reference.len()
+        );
+    }
+    let m = crate::shared::images::metrics(img, reference);
+    Ok((m.rmse, m.relmse))
 }
