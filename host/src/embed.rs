@@ -342,12 +342,7 @@ fn render_world(
 /// direction, t_min < 0, or t_max < t_min (naming the first such row).
 fn check_rays(n: usize, ray: &(dyn Fn(usize) -> RayRec + Sync)) -> Result<()> {
     use rayon::prelude::*;
-    let bad = (0..n).into_par_iter().find_first(|&i| {
-        let r = ray(i);
-        !(r.o.iter().chain(r.d.iter()).all(|x| x.is_finite())
-            && r.t_min >= 0.0
-            && !(r.t_max < r.t_min))
-    });
+    let bad = (0..n).into_par_iter().find_first(|&i| !ray(i).is_valid());
     match bad {
         Some(i) => {
             let r = ray(i);

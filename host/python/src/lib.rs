@@ -19,7 +19,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rtk_host::embed::{self, EmbeddedScene, HitArrays, RenderRequest, SceneSource};
 use rtk_shell::file::AttachedArray;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::RecvTimeoutError;
 use std::time::Duration;
@@ -492,13 +492,6 @@ fn run_command(py: Python<'_>, args: Vec<String>) -> PyResult<()> {
         .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))
 }
 
-/// Whether `path` is a folder holding at least one rtk plugin library.
-#[pyfunction]
-fn has_plugins(path: PathBuf) -> bool {
-    let p = rtk_shell::PluginPath { dirs: vec![path] };
-    !p.available().is_empty() && Path::new(&p.dirs[0]).is_dir()
-}
-
 /// The native module.
 #[pymodule]
 fn _rtk(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -510,6 +503,5 @@ fn _rtk(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_image, m)?)?;
     m.add_function(wrap_pyfunction!(image_error, m)?)?;
     m.add_function(wrap_pyfunction!(run_command, m)?)?;
-    m.add_function(wrap_pyfunction!(has_plugins, m)?)?;
     Ok(())
 }

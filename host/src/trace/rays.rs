@@ -36,6 +36,17 @@ pub struct HitRec {
     pub v: f32,
 }
 
+impl RayRec {
+    /// What `rtk trace` accepts: a finite origin and direction, t_min >= 0
+    /// and t_max >= t_min (a NaN t_max is refused, an infinite one not).
+    pub fn is_valid(&self) -> bool {
+        self.o.iter().chain(self.d.iter()).all(|x| x.is_finite())
+            && self.t_min >= 0.0
+            && !(self.t_max < self.t_min)
+            && !self.t_max.is_nan()
+    }
+}
+
 impl HitRec {
     /// A miss: `t` +inf, no primitive.
     pub const MISS: HitRec = HitRec {
@@ -225,11 +236,7 @@ pub fn read_rays(path: &Path) -> Result<Vec<RayRec>> {
             t_max: f(c, 7),
         })
         .collect();
-    if let Some((i, _)) = rays.iter().enumerate().find(|(_, r)| {
-        !(r.o.iter().chain(r.d.iter()).all(|x| x.is_finite())
-            && r.t_min >= 0.0
-            && !(r.t_max < r.t_min))
-    }) {
+    if let Some((i, _)) = rays.iter().enumerate().find(|(_, r)| !r.is_valid()) {
         bail!(
             "{}: ray {i} has a non-finite origin or direction, or t_min < 0 or t_max < t_min",
             path.display()

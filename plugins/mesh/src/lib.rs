@@ -172,9 +172,9 @@ impl Plugin for Mesh {
 /// The `file` parameter resolved, once its format is known.
 fn file_param(file: &str, env: &Env) -> Result<PathBuf, PluginError> {
     if file.is_empty() {
-        return Err(PluginError::key(
-            "file",
-            "must name a .ply or .obj file (or the host must pass vertices and indices arrays)",
+        // Worded and located as the parameter parser words a missing key.
+        return Err(PluginError::msg(
+            "missing key `file` (a .ply or .obj file; or the host passes vertices and indices arrays)",
         ));
     }
     let ext = std::path::Path::new(file)

@@ -198,13 +198,13 @@ def load_file(path, *, accel=None, plugin_path=None, **overrides):
     return Scene(native)
 
 
-def load_string(text, base_dir=".", *, plugin_path=None, _arrays=(), **overrides):
+def load_string(text, base_dir=".", *, plugin_path=None, _arrays=(), _name="<string>.toml", **overrides):
     """Load a scene from TOML text; relative file parameters resolve
     against ``base_dir``."""
     native = _rtk.load_string(
         text,
         str(base_dir),
-        "<string>.toml",
+        _name,
         _sets(overrides),
         list(_arrays),
         _paths(plugin_path),
@@ -262,7 +262,10 @@ def load_dict(d, base_dir=".", *, plugin_path=None, **overrides):
     lines, arrays = [], []
     _emit_table([], d, lines, arrays)
     bulk = [(p, n, _bulk(p, n, a)) for p, n, a in arrays]
-    return load_string("\n".join(lines) + "\n", base_dir, plugin_path=plugin_path, _arrays=bulk, **overrides)
+    text = "\n".join(lines) + "\n"
+    return load_string(
+        text, base_dir, plugin_path=plugin_path, _arrays=bulk, _name="<dict>.toml", **overrides
+    )
 
 
 def plugins(plugin_path=None):
