@@ -406,3 +406,97 @@ fn killed_checkpointed_renders_resume_to_the_uninterrupted_image() {
         println!("{r}");
     }
 }
+
+/// Resident memory of a live process, from /proc (bytes).
+#[cfg(target_os = "linux")]
+fn resident_bytes(pid: u32) -> Option<u64> {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let kb = s.lines().find(|l| l.starts_with("VmRSS:"))?;
+    kb.split_whitespace()
+        .nth(1)?
+        .parse::<u64>()
+        .ok()
+        .map(|k| k * 1024)
+}
+
+/// Issue 25 item 8, the soak run: a render of 3000 passes (one sample per
+/// pixel each, as `--time-limit` makes them), a checkpoint after every
+/// pass, 16 threads on however few cores: resident memory stays flat once
+/// the first checkpoint is written, every pixel ends with exactly its
+/// samples, and the image equals one plain 2-thread render bit for bit.
+#[test]
+#[cfg(target_os = "linux")]
+#[ignore = "minutes: 3000 checkpointed passes on 16 threads (README: long tests)"]
+fn soak_thousands_of_checkpointed_passes_keep_memory_flat_and_counts_exact() {
+    use std::time::Duration;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = cornell();
+    let (out, ck) = (dir.path().join("soak.exr"), dir.path().join("soak.rtkfilm"));
+    let size = [
+        "--set",
+        "render.width=40",
+        "--set",
+        "render.height=40",
+        "--spp",
+        "3000",
+    ];
+    let mut args = vec!["render", scene.to_str().unwrap(), "-q", "--stats", "-o"];
+    args.push(out.to_str().unwrap());
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&["--threads", "16", "--time-limit", "1000000"]);
+    args.extend_from_slice(&[
+        "--checkpoint",
+        ck.to_str().unwrap(),
+        "--checkpoint-every",
+        "0",
+    ]);
+    let mut child = rtk(&args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    // (after the first checkpoint?, resident bytes), every 20 ms.
+    let mut samples = Vec::new();
+    while child.try_wait().unwrap().is_none() {
+        if let Some(rss) = resident_bytes(pid) {
+            samples.push((ck.exists(), rss));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let run = Run::from(child.wait_with_output().unwrap());
+    assert!(run.ok, "{}", run.stderr);
+    assert_eq!(
+        run.stats()["samples_per_pixel"],
+        serde_json::json!([3000, 3000])
+    );
+    let steady: Vec<u64> = samples.iter().filter(|s| s.0).map(|s| s.1).collect();
+    assert!(
+        steady.len() > 50,
+        "too few samples of the run's memory: {}",
+        steady.len()
+    );
+    let (first, max) = (steady[0], *steady.iter().max().unwrap());
+    println!(
+        "soak: {} memory samples after the first checkpoint, first {:.1} MiB, most {:.1} MiB",
+        steady.len(),
+        first as f64 / 1048576.0,
+        max as f64 / 1048576.0
+    );
+    // Flat: no growth with the passes beyond the allocator's page-level noise.
+    assert!(
+        max <= first + (4 << 20),
+        "resident memory grew from {first} to {max} bytes"
+    );
+    let plain = dir.path().join("plain.exr");
+    let mut args = vec!["render", scene.to_str().unwrap(), "-q", "-o"];
+    args.push(plain.to_str().unwrap());
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&["--threads", "2"]);
+    let r = Run::from(rtk(&args).output().unwrap());
+    assert!(r.ok, "{}", r.stderr);
+    assert!(
+        std::fs::read(&out).unwrap() == std::fs::read(&plain).unwrap(),
+        "the soak image differs from one plain render"
+    );
+}

@@ -13,7 +13,13 @@ out of NumPy (the call's arguments are NumPy arrays, its results NumPy
 arrays).
 """
 
-import argparse
+import os
+
+# NumPy's OpenBLAS threads spin after a BLAS call and would take the cores
+# from whichever tracer runs next: one thread, for every tracer alike.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
 import json
 import statistics
 import subprocess
@@ -39,6 +45,11 @@ def median_seconds(f, iters):
     return statistics.median(times)
 
 
+def resident_bytes():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
 def read_rays(path):
     rec = np.fromfile(path, dtype="<f4").reshape(-1, 8)
     return np.ascontiguousarray(rec[:, 0:3]), np.ascontiguousarray(rec[:, 3:6])
@@ -49,7 +60,7 @@ def cli_trace_seconds(rayset, threads, iters):
         [str(RTK), "trace", str(DRAGON), "--rayset", rayset, "--threads", str(threads),
          "--iters", str(iters), "--json"]
     )
-    return json.loads(out)["seconds"]
+    return json.loads(out)["trace_seconds"]
 
 
 def bench_trace(iters):
@@ -93,6 +104,12 @@ def bench_trace(iters):
                 f"{rayset},{threads},{m(cli):.2f},{m(py):.2f},{m(pys):.2f},{m(e_prim):.2f},{m(e_full):.2f},"
                 f"{cli / py:.3f},{e_prim / py:.2f}"
             )
+        rss0 = resident_bytes()
+        kept = scene.trace(o, d, surface=False)
+        grown = resident_bytes() - rss0
+        outputs = sum(v.nbytes for v in kept.values())
+        del kept
+        print(f"# {rayset}: {n} rays: resident memory grew {grown / 2**20:.1f} MiB for {outputs / 2**20:.1f} MiB of outputs")
         print(f"# {rayset}: hit/miss agree with embreex on {agree:.5%}, same prim on {same_prim:.5%} of common hits")
 
 
@@ -109,7 +126,7 @@ dr.set_thread_count(2)
 import scenes
 t_import = time.perf_counter() - t0
 def once():
-    s = mi.load_dict(scenes.load_scene("cornell"))
+    s = mi.load_dict(scenes.mitsuba_dict("cornell", spp={spp}))
     img = np.array(mi.render(s, spp={spp}, seed=1))
     return img
 once()

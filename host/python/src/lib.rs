@@ -17,7 +17,7 @@ use numpy::{
 use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rtk_host::embed::{self, EmbeddedScene, HitArrays, RenderRequest, SceneSource};
+use rtk_host::embed::{self, EmbeddedScene, HitArrays, RayRec, RenderRequest, SceneSource};
 use rtk_shell::file::AttachedArray;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -140,6 +140,7 @@ enum RayArrays<'a> {
 }
 
 /// `t_min`/`t_max`: one value for every ray, or one per ray.
+#[inline(always)]
 fn per_ray(v: &[f32], i: usize) -> f32 {
     if v.len() == 1 {
         v[0]
@@ -328,29 +329,31 @@ impl Scene {
                 )));
             }
         }
-        let ray = |i: usize| {
-            let (o, d) = match rays {
-                RayArrays::F32(o, d) => (
-                    [o[3 * i], o[3 * i + 1], o[3 * i + 2]],
-                    [d[3 * i], d[3 * i + 1], d[3 * i + 2]],
-                ),
-                RayArrays::F64(o, d) => (
-                    [o[3 * i] as f32, o[3 * i + 1] as f32, o[3 * i + 2] as f32],
-                    [d[3 * i] as f32, d[3 * i + 1] as f32, d[3 * i + 2] as f32],
-                ),
-            };
-            rtk_host::embed::RayRec {
-                o,
-                d,
-                t_min: per_ray(tmin, i),
-                t_max: per_ray(tmax, i),
-            }
-        };
         let m = if surface { n } else { 0 };
         let mut out = Outputs::new(n, m);
         let inner = &self.inner;
-        py.detach(|| inner.trace(n, &ray, occluded, threads, out.arrays()))
-            .map_err(err)?;
+        // One closure per element type, so each inlines into the tracing loop.
+        let traced = match rays {
+            RayArrays::F32(o, d) => {
+                let ray = |i: usize| RayRec {
+                    o: [o[3 * i], o[3 * i + 1], o[3 * i + 2]],
+                    d: [d[3 * i], d[3 * i + 1], d[3 * i + 2]],
+                    t_min: per_ray(tmin, i),
+                    t_max: per_ray(tmax, i),
+                };
+                py.detach(|| inner.trace(n, &ray, occluded, threads, out.arrays()))
+            }
+            RayArrays::F64(o, d) => {
+                let ray = |i: usize| RayRec {
+                    o: [o[3 * i] as f32, o[3 * i + 1] as f32, o[3 * i + 2] as f32],
+                    d: [d[3 * i] as f32, d[3 * i + 1] as f32, d[3 * i + 2] as f32],
+                    t_min: per_ray(tmin, i),
+                    t_max: per_ray(tmax, i),
+                };
+                py.detach(|| inner.trace(n, &ray, occluded, threads, out.arrays()))
+            }
+        };
+        traced.map_err(err)?;
         out.into_dict(py, surface)
     }
 }

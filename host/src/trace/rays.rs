@@ -39,6 +39,7 @@ pub struct HitRec {
 impl RayRec {
     /// What `rtk trace` accepts: a finite origin and direction, t_min >= 0
     /// and t_max >= t_min (a NaN t_max is refused, an infinite one not).
+    #[inline]
     pub fn is_valid(&self) -> bool {
         self.o.iter().chain(self.d.iter()).all(|x| x.is_finite())
             && self.t_min >= 0.0
