@@ -94,8 +94,9 @@ fn restore_sigpipe() {
 /// the error on failure.
 pub fn main() {
     restore_sigpipe();
+    crate::shared::faults::install();
     let start = Instant::now();
-    if let Err(e) = dispatch(Cli::parse(), start) {
+    if let Err(e) = dispatch(Cli::parse(), start, false) {
         eprintln!("error: {}", printable(&format!("{e:#}")));
         std::process::exit(1);
     }
@@ -107,10 +108,12 @@ pub fn main() {
 pub fn run_args(args: &[String]) -> anyhow::Result<()> {
     let argv = std::iter::once("rtk".to_string()).chain(args.iter().cloned());
     let cli = Cli::try_parse_from(argv).map_err(|e| anyhow::anyhow!("{}", e.render()))?;
-    dispatch(cli, Instant::now())
+    dispatch(cli, Instant::now(), true)
 }
 
-fn dispatch(cli: Cli, start: Instant) -> anyhow::Result<()> {
+/// Run the parsed command; `embedded`: inside another program (no child
+/// processes of the running executable, which is not `rtk`).
+fn dispatch(cli: Cli, start: Instant, embedded: bool) -> anyhow::Result<()> {
     match cli.command {
         Command::Render(a) => render::run(a, start),
         Command::Trace(a) => {
@@ -134,6 +137,7 @@ fn dispatch(cli: Cli, start: Instant) -> anyhow::Result<()> {
         }
         Command::Merge { out, parts } => merge::run(&out, &parts),
         Command::New(a) => new::run(a),
+        Command::Conform(a) if !a.in_process && !embedded => conform::run_in_child(),
         Command::Conform(a) => {
             pool(Some(a.threads.max(2))).and_then(|(pool, _)| conform::run(a, &pool))
         }

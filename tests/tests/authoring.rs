@@ -739,3 +739,27 @@ fn conform_passes_every_built_in_plugin_with_no_arguments() {
     let r = conform(&built_in("area"));
     assert!(r.stdout.contains("pass  pdf-matches-hit"), "{}", r.stdout);
 }
+
+/// `rtk conform` runs the checks in a child process of itself: a plugin
+/// that aborts in the middle of them is named (by the child's SIGABRT
+/// handler), the suite reports the stop as a failure of its own and exits
+/// non-zero rather than dying with the plugin.
+#[test]
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn conform_survives_a_plugin_that_aborts_and_names_it() {
+    let r = conform_with(
+        &fixture("panicky"),
+        &["--params", "panic_in = \"intersect\"\nfault = \"abort\""],
+    );
+    assert!(!r.ok);
+    assert!(
+        r.stdout.contains("FAIL  (the suite)") && r.stdout.contains("signal 6"),
+        "{}",
+        r.stdout
+    );
+    assert!(
+        r.stderr.contains("plugin `panicky` (") && r.stderr.contains("SIGABRT"),
+        "{}",
+        r.stderr
+    );
+}

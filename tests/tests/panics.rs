@@ -108,3 +108,67 @@ fn panic_in_occluded_under_whitted() {
         "plugin `panicky` panicked in occluded: deliberate panic in occluded",
     );
 }
+
+/// Render the `panicky` fixture with `fault` in `intersect`: the process's
+/// exit status, its stderr, and whether it wrote the output.
+#[cfg(unix)]
+fn render_fault(fault: &str, extra: &[&str]) -> (std::process::ExitStatus, String, bool) {
+    let folder = plugin_folder(fixtures_dir(), &["panicky"]);
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("fault.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[render]\nwidth = 8\nheight = 8\nroot = \"x\"\nintegrator = \"normals\"\n[cameras.c]\nclass = \"pinhole\"\n\
+             [objects.x]\nclass = \"panicky\"\npanic_in = \"intersect\"\nfault = \"{fault}\"\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("fault.png");
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(&["--plugin-path", folder.path().to_str().unwrap()]);
+    args.extend_from_slice(extra);
+    let o = rtk(&args).output().unwrap();
+    (
+        o.status,
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+        out.exists(),
+    )
+}
+
+/// An abort inside a plugin cannot be caught, but it is named: the host's
+/// SIGABRT handler finds the plugin's library on the aborting stack. The
+/// process still dies of SIGABRT (a shell or a farm sees the signal), and
+/// writes nothing.
+#[test]
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn an_abort_in_a_plugin_names_the_plugin_and_keeps_the_signal() {
+    use std::os::unix::process::ExitStatusExt;
+    let (status, stderr, wrote) = render_fault("abort", &[]);
+    assert_eq!(status.signal(), Some(6), "{status:?}: {stderr}");
+    assert!(
+        stderr.contains("plugin `panicky` (")
+            && stderr.contains("librtk_panicky.so) stopped the process with SIGABRT"),
+        "{stderr}"
+    );
+    assert!(!wrote);
+}
+
+/// A plugin call that never returns does not hang the host when a time
+/// limit is given: past the limit and a grace period the render threads
+/// name the plugin they are in, and rtk exits with status 124.
+#[test]
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn a_plugin_call_that_never_returns_is_stopped_after_the_time_limit() {
+    let (status, stderr, wrote) = render_fault("hang", &["--time-limit", "0.5", "--threads", "2"]);
+    assert_eq!(status.code(), Some(124), "{stderr}");
+    assert!(stderr.contains("a plugin call does not return"), "{stderr}");
+    assert!(stderr.contains("inside plugin `panicky`"), "{stderr}");
+    assert!(!wrote);
+}

@@ -80,6 +80,37 @@ pub struct ConformArgs {
     /// `--skip furnace` for an integrator that does not estimate radiance.
     #[arg(long, value_name = "CHECK")]
     pub skip: Vec<String>,
+    /// Run the checks in this process (the `rtk` binary runs them in a
+    /// child process of itself, so that a plugin that aborts or crashes
+    /// ends the child, not the suite's report).
+    #[arg(long = "in-process", hide = true)]
+    pub in_process: bool,
+}
+
+/// `rtk conform` as the binary runs it: the same command line in a child
+/// process (with `--in-process`), its output passed through; a child ended
+/// by a signal (a plugin that aborted or crashed: the child's handler has
+/// named it) is reported as a failure of the suite, which still exits.
+pub fn run_in_child() -> Result<()> {
+    let exe = std::env::current_exe().context("finding the rtk binary to run the checks in")?;
+    let mut args: Vec<std::ffi::OsString> = std::env::args_os().skip(1).collect();
+    args.push("--in-process".into());
+    let status = std::process::Command::new(&exe)
+        .args(&args)
+        .status()
+        .with_context(|| format!("running {}", exe.display()))?;
+    if status.success() {
+        return Ok(());
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(sig) = status.signal() {
+            println!("FAIL  (the suite)          the plugin ended the checks with signal {sig}; the checks after the last line above did not run");
+            bail!("the conformance run was stopped by signal {sig} (see above)");
+        }
+    }
+    std::process::exit(status.code().unwrap_or(1));
 }
 
 const CONFORM_HELP: &str = "\

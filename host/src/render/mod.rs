@@ -271,8 +271,16 @@ fn render_in_passes(
     };
     install_interrupt_handler();
     let t_render = Instant::now();
+    let watchdog = passes
+        .time_limit
+        .map(|limit| HangWatchdog::start(t_render + limit, limit));
     let mut last_checkpoint = Instant::now();
+    let mut last_pass = Instant::now();
     let mut save = |acc: &Accum| -> Result<(), String> {
+        if let Some(w) = &watchdog {
+            w.passed(last_pass.elapsed());
+            last_pass = Instant::now();
+        }
         if let Some(c) = &a.checkpoint {
             if last_checkpoint.elapsed() >= passes.checkpoint_every {
                 film_file::write(c, header, acc).map_err(|e| format!("{e:#}"))?;
@@ -296,8 +304,79 @@ fn render_in_passes(
         after_pass: &mut save,
     };
     let end = render_loop::render_passes(&tracer, pool, &mut ctl, accum)
-        .map_err(|m| anyhow!("rendering {} failed: {m}", a.scene.display()))?;
-    Ok((end, t_render.elapsed()))
+        .map_err(|m| anyhow!("rendering {} failed: {m}", a.scene.display()));
+    if let Some(w) = &watchdog {
+        w.finished();
+    }
+    Ok((end?, t_render.elapsed()))
+}
+
+/// Exit status of a render whose plugin call did not return after
+/// `--time-limit` (GNU `timeout`'s).
+const EXIT_HUNG: i32 = 124;
+
+/// Shortest wait past `--time-limit` before a render is taken to be hung.
+const HANG_GRACE: Duration = Duration::from_secs(10);
+
+/// Under `--time-limit`, the render stops after the pass during which the
+/// limit passes. A pass that does not end (a plugin call looping) would
+/// hang the host for ever: this thread waits past the limit for the
+/// longest of [`HANG_GRACE`], the limit itself and twice the longest pass
+/// so far, then names the plugins the render threads are in and exits
+/// with [`EXIT_HUNG`] (the last checkpoint stays; nothing else is written).
+struct HangWatchdog {
+    state: std::sync::Arc<(std::sync::Mutex<(bool, Duration)>, std::sync::Condvar)>,
+}
+
+impl HangWatchdog {
+    fn start(deadline: Instant, limit: Duration) -> HangWatchdog {
+        let state = std::sync::Arc::new((
+            std::sync::Mutex::new((false, Duration::ZERO)),
+            std::sync::Condvar::new(),
+        ));
+        let s = state.clone();
+        std::thread::spawn(move || {
+            let (lock, cv) = &*s;
+            let Ok(mut g) = lock.lock() else { return };
+            loop {
+                if g.0 {
+                    return;
+                }
+                let grace = HANG_GRACE.max(limit).max(2 * g.1);
+                let now = Instant::now();
+                if now >= deadline + grace {
+                    break;
+                }
+                let Ok((next, _)) = cv.wait_timeout(g, deadline + grace - now) else {
+                    return;
+                };
+                g = next;
+            }
+            eprintln!(
+                "error: --time-limit {:.1} s: the render has not stopped {:.1} s after the limit; a plugin call does not return",
+                limit.as_secs_f64(),
+                (Instant::now() - deadline).as_secs_f64()
+            );
+            crate::shared::faults::report_stuck_threads();
+            std::process::exit(EXIT_HUNG);
+        });
+        HangWatchdog { state }
+    }
+
+    /// A pass took `d`.
+    fn passed(&self, d: Duration) {
+        if let Ok(mut g) = self.state.0.lock() {
+            g.1 = g.1.max(d);
+        }
+    }
+
+    /// The render returned: the watchdog stands down.
+    fn finished(&self) {
+        if let Ok(mut g) = self.state.0.lock() {
+            g.0 = true;
+        }
+        self.state.1.notify_all();
+    }
 }
 
 /// Write the last checkpoint and the output (an image, or a film file for

@@ -3,6 +3,7 @@
 //! them atomically (`rtk render`, `rtk merge`, `rtk converge`), and making
 //! messages safe to print.
 
+pub(crate) mod faults;
 pub(crate) mod images;
 pub(crate) mod output;
 pub(crate) mod scene;

@@ -65,6 +65,7 @@ pub(crate) fn pool(threads: Option<usize>) -> Result<(rayon::ThreadPool, usize)>
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("rtk-render-{i}"))
+        .start_handler(|_| super::faults::register_thread())
         .stack_size(STACK_BYTES as usize)
         .build()
         .context("starting the thread pool")?;
