@@ -785,3 +785,122 @@ fn a_killed_runs_temporary_is_removed_by_the_next_run() {
     assert!(!stale.exists(), "the stale temporary is still there");
     assert!(live.exists(), "a live process's temporary was removed");
 }
+
+/// `rtk render` under a file-size limit of `blocks` KiB (RLIMIT_FSIZE via
+/// the shell's `ulimit -f`, with SIGXFSZ ignored so that a write past it
+/// fails with EFBIG, as on a full disk, instead of killing the process).
+#[cfg(target_os = "linux")]
+fn render_under_fsize_limit(blocks: u32, args: &[&str]) -> Run {
+    let mut cmd = std::process::Command::new("bash");
+    cmd.arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f {blocks}; exec \"$0\" \"$@\""
+        ))
+        .arg(rtk_path())
+        .args(args)
+        .env_remove("RTK_PLUGIN_PATH")
+        .env("RUST_BACKTRACE", "0");
+    Run::from(cmd.output().unwrap())
+}
+
+/// A disk that fills while the output is written (issue 25, item 1): a
+/// clear error naming the file, a non-zero exit, the previous output
+/// intact, and no temporary left beside it.
+#[test]
+#[cfg(target_os = "linux")]
+fn a_full_disk_while_writing_the_image_keeps_the_previous_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    std::fs::write(&out, b"the previous image").unwrap();
+    let scene = root().join("scenes/sphere-normals.toml");
+    let r = render_under_fsize_limit(
+        16,
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    );
+    assert!(!r.ok);
+    assert!(
+        r.stderr.contains("writing") && r.stderr.contains("out.exr"),
+        "{}",
+        r.stderr
+    );
+    assert!(
+        r.stderr.contains("File too large") || r.stderr.contains("too large"),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), b"the previous image");
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(left.len(), 1, "left behind: {left:?}");
+}
+
+/// The same for a checkpoint: a checkpoint that cannot be written stops the
+/// render with an error naming it, and the previous checkpoint still loads
+/// (a resume from it completes the render).
+#[test]
+#[cfg(target_os = "linux")]
+fn a_full_disk_while_writing_a_checkpoint_keeps_the_previous_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, ck) = (dir.path().join("out.exr"), dir.path().join("ck.rtkfilm"));
+    let scene = root().join("scenes/cornell.toml");
+    let base = |spp: &str| {
+        vec![
+            "render".to_string(),
+            scene.to_str().unwrap().to_string(),
+            "-q".into(),
+            "-o".into(),
+            out.to_str().unwrap().to_string(),
+            "--set".into(),
+            "render.width=64".into(),
+            "--set".into(),
+            "render.height=64".into(),
+            "--spp".into(),
+            spp.into(),
+            "--checkpoint".into(),
+            ck.to_str().unwrap().to_string(),
+        ]
+    };
+    // A first checkpoint, of the first pass only: the one to keep.
+    let mut first: Vec<String> = base("16");
+    first.extend(["--time-limit".into(), "0".into()]);
+    let r = Run::from(
+        rtk(&first.iter().map(String::as_str).collect::<Vec<_>>())
+            .output()
+            .unwrap(),
+    );
+    assert!(r.ok, "{}", r.stderr);
+    let kept = std::fs::read(&ck).unwrap();
+    // Resuming it under a limit too small for a checkpoint (64x64 f64 sums
+    // are 96 KiB): the first checkpoint write fails.
+    let mut more = base("16");
+    more.extend([
+        "--resume".into(),
+        ck.to_str().unwrap().to_string(),
+        "--checkpoint-every".into(),
+        "0".into(),
+    ]);
+    let r = render_under_fsize_limit(32, &more.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!r.ok);
+    assert!(r.stderr.contains("ck.rtkfilm"), "{}", r.stderr);
+    assert_eq!(
+        std::fs::read(&ck).unwrap(),
+        kept,
+        "the previous checkpoint changed"
+    );
+    // It still loads: resuming from it without the limit completes.
+    let r = Run::from(
+        rtk(&more.iter().map(String::as_str).collect::<Vec<_>>())
+            .output()
+            .unwrap(),
+    );
+    assert!(r.ok, "{}", r.stderr);
+}
