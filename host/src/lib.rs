@@ -14,6 +14,7 @@ mod conform;
 mod converge;
 mod diff;
 pub mod embed;
+pub mod fuzzing;
 mod merge;
 mod new;
 mod plugins;

@@ -7,6 +7,7 @@ mod csg;
 mod distributed;
 mod dropin;
 mod farm;
+mod fuzz;
 mod hostile;
 mod hygiene;
 mod interior;

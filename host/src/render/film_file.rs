@@ -198,19 +198,25 @@ pub fn read(path: &Path) -> Result<(Header, Accum)> {
     if !meta.is_file() {
         bail!("{}: not a regular file", path.display());
     }
-    let mut r = BufReader::new(f);
-    let (header, rect) = read_header(path, &mut r, meta.len())?;
+    parse(path, &mut BufReader::new(f), meta.len())
+}
+
+/// A film file of `len` bytes read from `r` (`path` names it in messages):
+/// what [`read`] does once the file is open, and what the fuzz targets call
+/// on bytes ([`crate::fuzzing`]).
+pub(crate) fn parse(path: &Path, r: &mut impl Read, len: u64) -> Result<(Header, Accum)> {
+    let (header, rect) = read_header(path, r, len)?;
     let want = HEADER_BYTES + rect.len() as u64 * PIXEL_BYTES;
-    if meta.len() != want {
+    if len != want {
         bail!(
             "{}: the film file is {} bytes, its header says {want}: truncated or damaged",
             path.display(),
-            meta.len()
+            len
         );
     }
     let mut accum = Accum::new(header.width, header.height, rect)
         .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
-    read_pixels(path, &mut r, &header, &mut accum)?;
+    read_pixels(path, r, &header, &mut accum)?;
     Ok((header, accum))
 }
 

@@ -223,7 +223,6 @@ fn pfm_token<'a>(bytes: &'a [u8], pos: &mut usize) -> Result<&'a str> {
 }
 
 /// Write a PFM (RGB, little-endian, rows bottom to top).
-#[cfg(test)]
 pub fn pfm_bytes(img: &Image) -> Vec<u8> {
     let mut out = format!("PF\n{} {}\n-1.0\n", img.width, img.height).into_bytes();
     let w = img.width as usize * 3;
@@ -380,7 +379,6 @@ fn npy_value<'a>(header: &'a str, key: &str) -> Result<&'a str> {
 }
 
 /// Write a .npy: float32, little-endian, (H, W, 3), C order.
-#[cfg(test)]
 pub fn npy_bytes(img: &Image) -> Vec<u8> {
     let dict = format!(
         "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, 3), }}",

@@ -218,6 +218,12 @@ pub const MAX_RAY_FILE_BYTES: u64 = (RAY_BYTES as u64) << 27;
 pub fn read_rays(path: &Path) -> Result<Vec<RayRec>> {
     let bytes = rtk_shell::file::read_regular_file(path, MAX_RAY_FILE_BYTES, "ray file")
         .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?;
+    parse_rays(path, &bytes)
+}
+
+/// A ray file's bytes (`path` names it in messages): what [`read_rays`]
+/// does once the file is read, and what the fuzz targets call.
+pub(crate) fn parse_rays(path: &Path, bytes: &[u8]) -> Result<Vec<RayRec>> {
     if bytes.len() % RAY_BYTES != 0 {
         bail!(
             "{}: {} bytes is not a whole number of {RAY_BYTES}-byte rays (ox oy oz dx dy dz t_min t_max, little-endian f32)",
