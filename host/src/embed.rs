@@ -564,6 +564,9 @@ pub fn run_command(args: &[String]) -> Result<()> {
 /// `rtk render` writes its output: PNG (sRGB, 8-bit) or EXR (linear float),
 /// atomically (nothing is left at `path` if writing fails).
 pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<()> {
+    if width == 0 || height == 0 {
+        bail!("{}: the image is empty ({width}x{height})", path.display());
+    }
     if rgb.len() as u64 != width as u64 * height as u64 * 3 {
         bail!(
             "{}: the image must hold width x height x 3 values",

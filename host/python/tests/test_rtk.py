@@ -378,3 +378,25 @@ def test_converge_returns_its_table(root, tmp_path):
     assert spp == [1, 4]
     rmse = np.asarray(table["rmse"], dtype=float)
     assert rmse[1] < rmse[0]
+
+
+def test_arrays_outside_a_mesh_are_values_and_occluded_has_no_surface_fields():
+    d = quad_scene(QUAD_V, QUAD_F)
+    d["cameras"]["cam"]["eye"] = np.array([[0.0, 0.0, 40.0]])  # a 2-D array: a list of lists
+    with pytest.raises(ValueError, match="eye"):
+        rtk.load_dict(d)
+    with pytest.raises(ValueError, match="2-D"):
+        rtk.load_dict(quad_scene(QUAD_V.ravel(), QUAD_F))
+    scene = rtk.load_dict(quad_scene(QUAD_V, QUAD_F))
+    h = scene.trace(np.array([[0.5, -0.5, 2.0]]), np.array([[0.0, 0.0, 1.0]]), occluded=True)
+    assert set(h) == {"t", "prim", "bary", "hit"} and not h["hit"][0]
+
+
+def test_empty_images_and_bad_render_counts_are_refused(tmp_path, root):
+    with pytest.raises(ValueError, match="empty"):
+        rtk.write(tmp_path / "e.exr", np.zeros((0, 5, 3), np.float32))
+    assert not list(tmp_path.iterdir())
+    scene = rtk.load_file(root / "scenes/cornell.toml", **SMALL)
+    for kw in ({"spp": 0}, {"threads": 0}, {"seed": -1}, {"spp": 2**32}):
+        with pytest.raises(ValueError, match=next(iter(kw))):
+            scene.render(**kw)

@@ -224,7 +224,7 @@ pub fn read_rays(path: &Path) -> Result<Vec<RayRec>> {
 /// A ray file's bytes (`path` names it in messages): what [`read_rays`]
 /// does once the file is read, and what the fuzz targets call.
 pub(crate) fn parse_rays(path: &Path, bytes: &[u8]) -> Result<Vec<RayRec>> {
-    if bytes.len() % RAY_BYTES != 0 {
+    if !bytes.len().is_multiple_of(RAY_BYTES) {
         bail!(
             "{}: {} bytes is not a whole number of {RAY_BYTES}-byte rays (ox oy oz dx dy dz t_min t_max, little-endian f32)",
             path.display(),

@@ -119,9 +119,15 @@ class Scene:
         next sample and raises KeyboardInterrupt. ``progress=True`` shows a
         tqdm bar (in a terminal or in Jupyter; needs tqdm).
         """
-        for name, v in (("spp", spp), ("seed", seed), ("threads", threads)):
-            if v is not None and (not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 0):
-                raise ValueError(f"{name} must be a non-negative integer, got {v!r}")
+        for name, v, lo, hi in (
+            ("spp", spp, 1, 2**32 - 1),
+            ("seed", seed, 0, 2**63 - 1),
+            ("threads", threads, 1, 1024),
+        ):
+            if v is not None and (
+                not isinstance(v, (int, np.integer)) or isinstance(v, (bool, np.bool_)) or not lo <= v <= hi
+            ):
+                raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {v!r}")
         callback = None
         bar = None
         if progress:
@@ -160,7 +166,8 @@ class Scene:
         miss), ``bary`` (N x 2), ``hit`` (bool), and unless ``surface=False``
         ``object`` (index into :meth:`objects`, -1 none), ``normal`` (N x 3
         unit geometric normal) and ``uv`` (N x 2). With ``occluded=True``
-        ``hit`` says whether each ray is blocked (``t`` 0 if so).
+        ``hit`` says whether each ray is blocked (``t`` 0 and ``prim`` 1 if
+        so) and there are no surface fields.
         """
         o = np.asarray(origins)
         d = np.asarray(directions)
@@ -178,7 +185,9 @@ class Scene:
         d = np.ascontiguousarray(d, dtype=dtype)
         tmin = np.ascontiguousarray(np.atleast_1d(np.asarray(t_min, dtype=np.float32)).ravel())
         tmax = np.ascontiguousarray(np.atleast_1d(np.asarray(t_max, dtype=np.float32)).ravel())
-        return self._native.trace(o, d, tmin, tmax, bool(occluded), threads, bool(surface))
+        # An occlusion query finds no surface: no surface fields.
+        surface = bool(surface) and not occluded
+        return self._native.trace(o, d, tmin, tmax, bool(occluded), threads, surface)
 
 
 def load_file(path, *, accel=None, plugin_path=None, **overrides):
@@ -216,10 +225,17 @@ def load_string(text, base_dir=".", *, plugin_path=None, _arrays=(), _name="<str
 def _emit_table(path, table, lines, arrays):
     """Append ``[path]`` with its plain keys, then its sub-tables."""
     plain, subs = [], []
+    # Only a mesh takes arrays by pointer; elsewhere an array is a list
+    # (so a misplaced one is checked, and refused, as any value is).
+    is_mesh = len(path) == 2 and path[0] == "objects" and table.get("class") == "mesh"
     for k, v in table.items():
         if isinstance(v, dict):
             subs.append((k, v))
-        elif isinstance(v, np.ndarray) and v.ndim == 2 and path:
+        elif is_mesh and isinstance(v, np.ndarray):
+            if v.ndim != 2:
+                raise ValueError(
+                    f"{'.'.join(path)}.{k}: expected a 2-D array (rows x columns), got shape {v.shape}"
+                )
             arrays.append((".".join(path), str(k), v))
         else:
             plain.append((k, v))
@@ -252,8 +268,8 @@ def load_dict(d, base_dir=".", *, plugin_path=None, **overrides):
     """Load a scene from a dictionary shaped as the TOML file is
     (``{"render": {...}, "objects": {"ball": {"class": "sphere", ...}}}``).
 
-    A definition's 2-D NumPy arrays are passed by pointer, not as text:
-    a ``mesh`` takes ``vertices`` (V x 3, float32 or float64; float64 stays
+    A ``mesh`` definition's NumPy arrays are passed by pointer, not as text
+    (elsewhere an array is written as a list): a ``mesh`` takes ``vertices`` (V x 3, float32 or float64; float64 stays
     float64 until the plugin places it), ``indices`` (F x 3 integers) and
     optionally ``normals`` (V x 3) and ``uvs`` (V x 2) instead of ``file``.
     """
