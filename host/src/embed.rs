@@ -481,14 +481,7 @@ impl<F: Fn(usize) -> RayRec + Sync> TraceJob<'_, F> {
                 self.first_invalid.fetch_min(first + i, Ordering::Relaxed);
                 continue;
             }
-            let ray = Ray {
-                origin: r.o.into(),
-                dir: r.d.into(),
-                t_min: r.t_min,
-                t_max: r.t_max,
-                time: 0.0,
-                generation: 0,
-            };
+            let ray = crate::trace::to_ray(&r);
             if self.occluded {
                 let blocked = self.world.root.occluded(ctx, &ray);
                 out.t[i] = if blocked { 0.0 } else { f32::INFINITY };

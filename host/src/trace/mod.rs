@@ -414,7 +414,7 @@ pub(crate) fn trace_all(
 
 /// A ray file's ray as the kernel's, at time 0.
 #[inline]
-fn to_ray(r: &RayRec) -> Ray {
+pub(crate) fn to_ray(r: &RayRec) -> Ray {
     Ray {
         origin: r.o.into(),
         dir: r.d.into(),
