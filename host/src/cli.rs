@@ -34,13 +34,10 @@ enum Command {
     /// plot of RMSE against seconds, the fitted slope, and the equal-error
     /// time ratio against another renderer's curve (--compare).
     Converge(converge::ConvergeArgs),
-    /// RMSE and relMSE of image A against reference B (.exr, .pfm, .npy, .png).
-    Diff {
-        /// The image.
-        a: PathBuf,
-        /// The reference.
-        b: PathBuf,
-    },
+    /// RMSE and relMSE of image A against reference B (.exr, .pfm, .npy,
+    /// .png); with --ztest or --welch, a statistical test of equal means
+    /// (exit status 1 when it fails).
+    Diff(diff::DiffArgs),
     /// List every plugin on the plugin path with its kind and parameters.
     Plugins {
         /// Extra folders to search first (repeatable).
@@ -123,7 +120,7 @@ fn dispatch(cli: Cli, start: Instant, embedded: bool) -> anyhow::Result<()> {
         Command::Converge(a) => {
             pool(a.threads).and_then(|(pool, threads)| converge::run(a, &pool, threads))
         }
-        Command::Diff { a, b } => diff::run(&a, &b),
+        Command::Diff(a) => diff::run(&a),
         Command::Plugins {
             plugin_path,
             short,

@@ -3,7 +3,7 @@
 //! scene from a file, text or arrays, render it into memory, cast rays.
 //!
 //! Each command lives in its own module (`render/`, `trace/`, `stress/`,
-//! `converge/`, `conform/`, `diff.rs`, `plugins.rs`, `merge.rs`, `new.rs`,
+//! `converge/`, `conform/`, `diff/`, `plugins.rs`, `merge.rs`, `new.rs`,
 //! `bench_aggregate.rs`); what several commands use lives in `shared/`.
 //! The binary (`src/main.rs`) only calls [`cli::main`], so the Python module
 //! and `rtk` share every code path [`embed`] reaches.

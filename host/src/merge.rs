@@ -53,6 +53,7 @@ pub fn run(out: &Path, parts: &[PathBuf]) -> Result<()> {
                 }
                 covered[j] = true;
                 full.sums[j] = part.sums[i];
+                full.squares[j] = part.squares[i];
                 full.counts[j] = part.counts[i];
             }
         }

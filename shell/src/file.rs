@@ -201,13 +201,15 @@ impl SceneFile {
             ));
         };
         let keys: Vec<&str> = key.trim().split('.').collect();
-        if keys.iter().any(|k| k.is_empty()) || !SECTIONS.contains(&keys[0]) {
+        let params = crate::desc::params::SECTION;
+        if keys.iter().any(|k| k.is_empty()) || !(SECTIONS.contains(&keys[0]) || keys[0] == params)
+        {
             return Err(SceneError::invalid(
                 &origin,
                 "",
                 key,
                 format!(
-                    "the key path must start with one of {}",
+                    "the key path must start with one of {}, {params}",
                     SECTIONS.join(", ")
                 ),
             ));
@@ -226,6 +228,9 @@ impl SceneFile {
     /// made by setting its `class` first (`--set objects.x.class=sphere`),
     /// or whole, as a table (`--set 'objects.x={ class = "sphere" }'`).
     fn check_defined(&self, keys: &[&str], origin: &Origin) -> Result<(), SceneError> {
+        if let [crate::desc::params::SECTION, name, ..] = keys {
+            return self.check_param_defined(name, origin);
+        }
         let [section, name, key, ..] = keys else {
             return Ok(());
         };
@@ -249,6 +254,34 @@ impl SceneFile {
         .note(format!(
             "{section} defined: {}",
             if defined.is_empty() { "none".to_string() } else { defined.join(", ") }
+        )))
+    }
+
+    /// `--set params.name=...` sets a parameter the scene declares: a
+    /// misspelt name would otherwise set nothing the scene uses.
+    fn check_param_defined(&self, name: &str, origin: &Origin) -> Result<(), SceneError> {
+        let section = crate::desc::params::SECTION;
+        let declared: Vec<&str> = match self.root.get(section).map(|s| &s.value) {
+            Some(tree::Val::Table(t)) => t.iter().map(|(k, _, _)| k.as_str()).collect(),
+            _ => Vec::new(),
+        };
+        if declared.contains(&name) {
+            return Ok(());
+        }
+        Err(SceneError::new(
+            ErrorKind::UnknownReference,
+            origin,
+            section,
+            name,
+            format!("the scene declares no parameter `{name}` in [params]"),
+        )
+        .note(format!(
+            "parameters declared: {}",
+            if declared.is_empty() {
+                "none".to_string()
+            } else {
+                declared.join(", ")
+            }
         )))
     }
 

@@ -23,6 +23,7 @@ mod refusals;
 mod shading;
 mod silhouette;
 mod soundness;
+mod statistics;
 mod stress;
 mod thinlens;
 mod trace;

@@ -520,6 +520,8 @@ fn file_cases() -> Vec<Case> {
         edit("bicubic_file_is_dev_zero", "class = \"mesh\"\nfile = \"tri.obj\"", "class = \"bicubic\"\nfile = \"/dev/zero\"", &["scene.toml:27:8", "objects.tri: key `file`", "cannot read /dev/zero: it is a device, not a regular file"]),
         scene("merge_film_header_of_huge_size", GOOD, &["huge.rtkfilm: a damaged film header (image 4294967295x4294967295, 1 spp, rectangle 0,0,1,1)"]).with(Extra::Bytes("huge.rtkfilm", film(u32::MAX, u32::MAX, 1, f64::INFINITY))).command(&["merge", "{dir}/out.exr", "{dir}/huge.rtkfilm"]).refuse(&["panicked", "capacity overflow"]),
         scene("merge_film_spp_zero", GOOD, &["z.rtkfilm: a damaged film header (image 1x1, 0 spp, rectangle 0,0,1,1)"]).with(Extra::Bytes("z.rtkfilm", film(1, 1, 0, 0.0))).command(&["merge", "{dir}/out.exr", "{dir}/z.rtkfilm"]),
+        scene("merge_film_of_version_1", GOOD, &["v1.rtkfilm is a film file of version 1", "this rtk reads version 2 only"]).with(Extra::Bytes("v1.rtkfilm", [b"RTKFILM1".as_slice(), &film(1, 1, 1, 0.5)[8..]].concat())).command(&["merge", "{dir}/out.exr", "{dir}/v1.rtkfilm"]),
+        scene("merge_film_with_a_negative_square", GOOD, &["neg.rtkfilm: a pixel's sum of squares is not a finite non-negative number: damaged"]).with(Extra::Bytes("neg.rtkfilm", { let mut f = film(1, 1, 1, 0.5); let n = f.len(); f[n - 12..n - 4].copy_from_slice(&(-1.0f64).to_le_bytes()); f })).command(&["merge", "{dir}/out.exr", "{dir}/neg.rtkfilm"]),
         scene("merge_film_with_a_nan_sum", GOOD, &["nan.rtkfilm: a pixel's sum is not a finite number: damaged"]).with(Extra::Bytes("nan.rtkfilm", film(1, 1, 1, f64::NAN))).command(&["merge", "{dir}/out.exr", "{dir}/nan.rtkfilm"]),
         scene("resume_film_header_of_huge_size", GOOD, &["huge.rtkfilm: a damaged film header (image 4294967295x4294967295"]).with(Extra::Bytes("huge.rtkfilm", film(u32::MAX, u32::MAX, 1, 0.0))).args(&["--resume", "{dir}/huge.rtkfilm"]).refuse(&["panicked"]),
         scene("conform_params_from_dev_zero", GOOD, &["--params @/dev/zero: cannot read the parameter file: it is a device, not a regular file"]).command(&["conform", &bvh, "--params", "@/dev/zero"]),
@@ -534,9 +536,10 @@ fn file_cases() -> Vec<Case> {
 }
 
 /// A film file (docs/farm.md) of a `w` x `h` image holding its pixel
-/// (0, 0) alone, with `sum` in each channel and one sample.
+/// (0, 0) alone, with `sum` in each channel (its square the sums of
+/// squares) and one sample.
 fn film(w: u32, h: u32, spp: u32, sum: f64) -> Vec<u8> {
-    let mut b = b"RTKFILM1".to_vec();
+    let mut b = b"RTKFILM2".to_vec();
     b.extend(0u64.to_le_bytes());
     for v in [w, h, spp] {
         b.extend(v.to_le_bytes());
@@ -547,6 +550,9 @@ fn film(w: u32, h: u32, spp: u32, sum: f64) -> Vec<u8> {
     }
     for _ in 0..3 {
         b.extend(sum.to_le_bytes());
+    }
+    for _ in 0..3 {
+        b.extend((sum * sum).to_le_bytes());
     }
     b.extend(1u32.to_le_bytes());
     b

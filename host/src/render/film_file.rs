@@ -6,14 +6,14 @@
 //!
 //! | bytes | what |
 //! |---|---|
-//! | 8 | magic `RTKFILM1` |
+//! | 8 | magic `RTKFILM2` (version 2: version 1 had no squares, and is refused) |
 //! | 8 | FNV-1a 64 hash of the scene text and its `--set` overrides (those of the settings below excepted) |
 //! | 4 × 3 | full width, full height, spp |
 //! | 8 | seed |
 //! | 4 | pixel filter: 0 none, 1 box, 2 tent, 3 gaussian |
 //! | 4 | sampler: 0 independent, 1 stratified |
 //! | 4 × 4 | the rectangle held: x0, y0, x1, y1 |
-//! | 28 per pixel | row-major over the rectangle: the f64 sums of R, G, B, then the u32 sample count |
+//! | 52 per pixel | row-major over the rectangle: the f64 sums of R, G, B, the f64 sums of their squares, then the u32 sample count |
 
 use crate::render::render_loop::{Accum, Rect};
 use anyhow::{bail, Context, Result};
@@ -21,9 +21,13 @@ use rtk_shell::desc::render::Filter;
 use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::Path;
 
-const MAGIC: &[u8; 8] = b"RTKFILM1";
+const MAGIC: &[u8; 8] = b"RTKFILM2";
+/// The magic of the first version, which held no sums of squares: such a
+/// file cannot give a variance, so it is refused by name rather than read
+/// as something else.
+const MAGIC_V1: &[u8; 8] = b"RTKFILM1";
 const HEADER_BYTES: u64 = 8 + 8 + 12 + 8 + 4 + 4 + 16;
-const PIXEL_BYTES: u64 = 28;
+const PIXEL_BYTES: u64 = 52;
 
 /// The file name extension of film files written as the render's output.
 pub const EXTENSION: &str = "rtkfilm";
@@ -169,8 +173,8 @@ pub fn write(path: &Path, header: &Header, accum: &Accum) -> Result<()> {
         for v in [r.x0, r.y0, r.x1, r.y1] {
             w.write_all(&v.to_le_bytes())?;
         }
-        for (s, c) in accum.sums.iter().zip(&accum.counts) {
-            for v in s {
+        for ((s, q), c) in accum.sums.iter().zip(&accum.squares).zip(&accum.counts) {
+            for v in s.iter().chain(q) {
                 w.write_all(&v.to_le_bytes())?;
             }
             w.write_all(&c.to_le_bytes())?;
@@ -224,7 +228,14 @@ pub(crate) fn parse(path: &Path, r: &mut impl Read, len: u64) -> Result<(Header,
 /// it holds, refused unless it is a film file and its values make sense.
 fn read_header(path: &Path, r: &mut impl Read, len: u64) -> Result<(Header, Rect)> {
     let mut head = [0u8; HEADER_BYTES as usize];
-    if len < HEADER_BYTES || r.read_exact(&mut head).is_err() || &head[..8] != MAGIC {
+    let read = len >= HEADER_BYTES && r.read_exact(&mut head).is_ok();
+    if read && &head[..8] == MAGIC_V1 {
+        bail!(
+            "{} is a film file of version 1 (an rtk before the sums of squares): this rtk reads version 2 only; render it again",
+            path.display()
+        );
+    }
+    if !read || &head[..8] != MAGIC {
         bail!(
             "{} is not an rtk film file (checkpoint or crop): it does not start with {}",
             path.display(),
@@ -272,18 +283,24 @@ fn read_header(path: &Path, r: &mut impl Read, len: u64) -> Result<(Header, Rect
 /// are not finite and counts above the film's spp (a damaged file).
 fn read_pixels(path: &Path, r: &mut impl Read, header: &Header, accum: &mut Accum) -> Result<()> {
     let mut px = [0u8; PIXEL_BYTES as usize];
-    for (s, c) in accum.sums.iter_mut().zip(accum.counts.iter_mut()) {
+    let pixels = (accum.sums.iter_mut())
+        .zip(accum.squares.iter_mut())
+        .zip(accum.counts.iter_mut());
+    for ((s, q), c) in pixels {
         r.read_exact(&mut px)
             .with_context(|| format!("reading the film file {}", path.display()))?;
-        *s = [
-            f64::from_bits(u64_at(&px, 0)),
-            f64::from_bits(u64_at(&px, 8)),
-            f64::from_bits(u64_at(&px, 16)),
-        ];
-        *c = u32_at(&px, 24);
+        *s = std::array::from_fn(|k| f64::from_bits(u64_at(&px, 8 * k)));
+        *q = std::array::from_fn(|k| f64::from_bits(u64_at(&px, 24 + 8 * k)));
+        *c = u32_at(&px, 48);
         if !s.iter().all(|x| x.is_finite()) {
             bail!(
                 "{}: a pixel's sum is not a finite number: damaged",
+                path.display()
+            );
+        }
+        if !q.iter().all(|x| x.is_finite() && *x >= 0.0) {
+            bail!(
+                "{}: a pixel's sum of squares is not a finite non-negative number: damaged",
                 path.display()
             );
         }
@@ -357,6 +374,9 @@ mod tests {
             *s = [0.1 * i as f64, -0.0, f64::MIN_POSITIVE / 3.0];
             *c = i as u32 % 10;
         }
+        for (i, q) in a.squares.iter_mut().enumerate() {
+            *q = [0.01 * i as f64, 0.0, 1e300];
+        }
         write(&p, &header(), &a).unwrap();
         let (h, b) = read(&p).unwrap();
         assert_eq!(h, header());
@@ -365,11 +385,18 @@ mod tests {
         assert_eq!(b.counts, a.counts);
         let bits = |v: &[[f64; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&b.sums), bits(&a.sums));
+        assert_eq!(bits(&b.squares), bits(&a.squares));
         // Truncated: refused with the sizes.
         let bytes = std::fs::read(&p).unwrap();
         std::fs::write(&p, &bytes[..bytes.len() - 1]).unwrap();
         let e = read(&p).err().unwrap().to_string();
         assert!(e.contains("truncated or damaged"), "{e}");
+        // A version 1 file (no squares): refused by its version.
+        let mut v1 = bytes.clone();
+        v1[..8].copy_from_slice(MAGIC_V1);
+        std::fs::write(&p, &v1).unwrap();
+        let e = read(&p).err().unwrap().to_string();
+        assert!(e.contains("version 1") && e.contains("version 2"), "{e}");
     }
 
     #[test]

@@ -28,6 +28,11 @@ pub struct RenderArgs {
     /// `[render] output`, else the scene's name with .png, in the current folder.
     #[arg(short, long, value_name = "FILE")]
     output: Option<PathBuf>,
+    /// Also write the variance of one sample, per pixel and channel, to
+    /// FILE (.exr): Mitsuba's convention for its reference `_var` images,
+    /// what `rtk diff --ztest` and `--welch` read.
+    #[arg(long, value_name = "FILE.exr")]
+    variance: Option<PathBuf>,
     /// Frame N (from 0) of an animation of `--frames` frames: the scene's
     /// time [0, 1] (the `motion` class's keyframes) is split into equal
     /// frames and this render's shutter is frame N's share of it (with
@@ -118,6 +123,9 @@ pub fn run(a: RenderArgs, start: Instant) -> Result<()> {
 
     let out = output_path(&a, desc.render.output.as_deref());
     output::check_writable(&out)?;
+    if let Some(v) = &a.variance {
+        check_variance_path(v, &out)?;
+    }
     if let Some(c) = &a.checkpoint {
         output::check_can_create(c, "checkpoint")?;
     }
@@ -394,11 +402,43 @@ fn write_film(
     if film_file::is_film_path(out) {
         film_file::write(out, header, &accum)?;
     }
+    if let Some(v) = &a.variance {
+        let r = accum.rect;
+        let variance = Film {
+            width: r.width(),
+            height: r.height(),
+            pixels: accum.variance(),
+            stats: Default::default(),
+        };
+        output::write(&variance, v)?;
+    }
     let film = accum.into_film();
     if !film_file::is_film_path(out) {
         output::write(&film, out)?;
     }
     Ok((film, samples))
+}
+
+/// `--variance FILE` must be an EXR (a variance is no colour for a PNG)
+/// that can be written, and not the image itself.
+fn check_variance_path(v: &Path, out: &Path) -> Result<()> {
+    let exr = v
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !exr {
+        bail!(
+            "--variance {}: the variance is written as linear floats: name an .exr file",
+            v.display()
+        );
+    }
+    if v == out {
+        bail!(
+            "--variance {}: the same file as the image; name another",
+            v.display()
+        );
+    }
+    output::check_writable(v)
 }
 
 /// The closing line on stderr; a render stopped by Ctrl-C exits here with

@@ -39,8 +39,9 @@ pub struct Film {
 /// Bytes of film per pixel: linear RGB in f64.
 const FILM_BYTES_PER_PIXEL: u64 = std::mem::size_of::<[f64; 3]>() as u64;
 
-/// Bytes of an [`Accum`] per pixel: the f64 sums and the sample count.
-const ACCUM_BYTES_PER_PIXEL: u64 = FILM_BYTES_PER_PIXEL + 4;
+/// Bytes of an [`Accum`] per pixel: the f64 sums, their squares and the
+/// sample count.
+const ACCUM_BYTES_PER_PIXEL: u64 = 2 * FILM_BYTES_PER_PIXEL + 4;
 
 /// A vector of `n` copies of `v`, allocated fallibly.
 fn try_filled<T: Clone>(n: usize, v: T) -> Option<Vec<T>> {
@@ -115,8 +116,12 @@ impl std::fmt::Display for Rect {
 }
 
 /// A film being rendered: per pixel of `rect` (a rectangle of the full
-/// image, all of it unless cropped), the f64 sum of its samples' radiance
-/// and their number. What checkpoints and crop files hold.
+/// image, all of it unless cropped), the f64 sum of its samples' radiance,
+/// the sum of their squares and their number. What checkpoints and crop
+/// files hold. The squares cost 24 bytes a pixel and three multiply-adds a
+/// sample; they give every render its per-pixel variance (`--variance`),
+/// which the statistical tests of `rtk diff` need and which cannot be
+/// recovered afterwards.
 pub struct Accum {
     /// Width of the full image (what the camera sees).
     pub full_width: u32,
@@ -126,6 +131,8 @@ pub struct Accum {
     pub rect: Rect,
     /// Per pixel of `rect`, row-major: the sum of its samples.
     pub sums: Vec<[f64; 3]>,
+    /// Per pixel of `rect`: the sum of its samples' squares, per channel.
+    pub squares: Vec<[f64; 3]>,
     /// Per pixel of `rect`: how many samples the sum holds.
     pub counts: Vec<u32>,
     /// Counters summed over threads (of this run only).
@@ -146,12 +153,14 @@ impl Accum {
             )
         };
         let sums = try_filled(n, [0.0; 3]).ok_or_else(fail)?;
+        let squares = try_filled(n, [0.0; 3]).ok_or_else(fail)?;
         let counts = try_filled(n, 0u32).ok_or_else(fail)?;
         Ok(Accum {
             full_width,
             full_height,
             rect,
             sums,
+            squares,
             counts,
             stats: Stats::default(),
         })
@@ -162,6 +171,23 @@ impl Accum {
         let min = self.counts.iter().copied().min().unwrap_or(0);
         let max = self.counts.iter().copied().max().unwrap_or(0);
         (min, max)
+    }
+
+    /// The variance of one sample, per pixel and channel: the unbiased
+    /// sample variance (sum of squares − sum²/n) / (n − 1), clamped at 0
+    /// against rounding; 0 for pixels with fewer than two samples. This is
+    /// the per-sample variance Mitsuba's reference `_var` images hold (its
+    /// `moment` integrator's m₂ − m₁², which differs by n/(n−1)).
+    pub fn variance(&self) -> Vec<[f64; 3]> {
+        (self.sums.iter().zip(&self.squares).zip(&self.counts))
+            .map(|((s, q), &c)| {
+                if c < 2 {
+                    return [0.0; 3];
+                }
+                let n = c as f64;
+                std::array::from_fn(|k| ((q[k] - s[k] * s[k] / n) / (n - 1.0)).max(0.0))
+            })
+            .collect()
     }
 
     /// The image: each pixel its sum × (1 / count), black without samples.
@@ -330,11 +356,14 @@ pub fn render(
     let rect = Rect::full(film.width, film.height);
     let counts = try_filled(rect.len(), 0u32)
         .ok_or_else(|| "the film's sample counts could not be allocated".to_string())?;
+    let squares = try_filled(rect.len(), [0.0; 3])
+        .ok_or_else(|| "the film's sums of squares could not be allocated".to_string())?;
     let mut accum = Accum {
         full_width: film.width,
         full_height: film.height,
         rect,
         sums: film.pixels,
+        squares,
         counts,
         stats: film.stats,
     };
@@ -566,13 +595,17 @@ impl Job<'_, '_> {
     }
 
     /// The running sums and counts of the tile's pixels, in the tile's order.
-    fn read_tile(&self, film: &Mutex<&mut Accum>, tr: &Rect) -> Vec<([f64; 3], u32)> {
+    fn read_tile(&self, film: &Mutex<&mut Accum>, tr: &Rect) -> Vec<TilePixel> {
         let mut px = Vec::with_capacity(tr.len());
         if let Ok(f) = film.lock() {
             for y in tr.y0..tr.y1 {
                 for x in tr.x0..tr.x1 {
                     let i = self.index(x, y);
-                    px.push((f.sums[i], f.counts[i]));
+                    px.push(TilePixel {
+                        sum: f.sums[i],
+                        square: f.squares[i],
+                        count: f.counts[i],
+                    });
                 }
             }
         }
@@ -580,20 +613,15 @@ impl Job<'_, '_> {
     }
 
     /// Store the tile's pixels back into the film, with the counters.
-    fn write_tile(
-        &self,
-        film: &Mutex<&mut Accum>,
-        tr: &Rect,
-        px: Vec<([f64; 3], u32)>,
-        stats: &Stats,
-    ) {
+    fn write_tile(&self, film: &Mutex<&mut Accum>, tr: &Rect, px: Vec<TilePixel>, stats: &Stats) {
         let tw = tr.width() as usize;
         if let Ok(mut f) = film.lock() {
-            for (i, (sum, count)) in px.into_iter().enumerate() {
+            for (i, p) in px.into_iter().enumerate() {
                 let (x, y) = (tr.x0 + (i % tw) as u32, tr.y0 + (i / tw) as u32);
                 let j = self.index(x, y);
-                f.sums[j] = sum;
-                f.counts[j] = count;
+                f.sums[j] = p.sum;
+                f.squares[j] = p.square;
+                f.counts[j] = p.count;
             }
             f.stats.merge(stats);
         }
@@ -709,11 +737,20 @@ impl Job<'_, '_> {
 
 /// The samples a pass asks of a tile's pixels `px`: per pixel, from its
 /// count up to `target`.
-fn up_to(px: &[([f64; 3], u32)], target: u32) -> Vec<(usize, u32, u32)> {
+fn up_to(px: &[TilePixel], target: u32) -> Vec<(usize, u32, u32)> {
     (px.iter().enumerate())
-        .filter(|(_, p)| p.1 < target)
-        .map(|(i, p)| (i, p.1, target))
+        .filter(|(_, p)| p.count < target)
+        .map(|(i, p)| (i, p.count, target))
         .collect()
+}
+
+/// A pixel's running sums while its tile is rendered (a copy of its
+/// [`Accum`] entries, taken and put back under the film's lock).
+#[derive(Clone, Copy)]
+struct TilePixel {
+    sum: [f64; 3],
+    square: [f64; 3],
+    count: u32,
 }
 
 /// Where a tile's samples go: straight into its pixels' running sums, or
@@ -724,27 +761,29 @@ trait Sink {
     fn sample(&mut self, i: usize, l: Option<Color>, stats: &mut Stats);
 }
 
-impl Sink for [([f64; 3], u32)] {
+impl Sink for [TilePixel] {
     #[inline]
     fn sample(&mut self, i: usize, l: Option<Color>, stats: &mut Stats) {
         add_sample(&mut self[i], l, stats);
     }
 }
 
-/// Add a sample to a pixel's running sum and count: a non-finite one (a
+/// Add a sample to a pixel's running sums and count: a non-finite one (a
 /// plugin's NaN or infinity) counts as black and is reported.
 #[inline]
-fn add_sample(p: &mut ([f64; 3], u32), l: Option<Color>, stats: &mut Stats) {
+fn add_sample(p: &mut TilePixel, l: Option<Color>, stats: &mut Stats) {
     if let Some(l) = l {
         if l.is_finite() {
-            p.0[0] += l.r as f64;
-            p.0[1] += l.g as f64;
-            p.0[2] += l.b as f64;
+            let v = [l.r as f64, l.g as f64, l.b as f64];
+            for ((s, q), v) in p.sum.iter_mut().zip(&mut p.square).zip(v) {
+                *s += v;
+                *q += v * v;
+            }
         } else {
             stats.nonfinite_samples += 1;
         }
     }
-    p.1 += 1;
+    p.count += 1;
 }
 
 /// Camera rays waiting to be traced together: each with its random stream

@@ -6,11 +6,13 @@
 //!
 //! - [`render`]: the `[render]` settings;
 //! - [`defs`]: plugin definitions and their parameters;
-//! - [`instance`]: instances and their transforms.
+//! - [`instance`]: instances and their transforms;
+//! - [`params`]: the `[params]` table and its `$name` references.
 
 pub(crate) mod check;
 pub mod defs;
 pub mod instance;
+pub mod params;
 pub mod render;
 
 pub use defs::{Accel, Def, ObjDef};
@@ -44,6 +46,7 @@ impl Desc {
     }
 
     fn read(root: &Node) -> Result<Desc, SceneError> {
+        let root = &params::substituted(root)?;
         check::unknown_keys(root, "", &SECTIONS)?;
         check_instance_count(root)?;
         let cameras = defs_of(root, "cameras")?;

@@ -49,8 +49,8 @@ impl Job<'_, '_> {
         let mut taken = 0;
         loop {
             let work: Vec<(usize, u32, u32)> = (px.iter().enumerate())
-                .filter(|(_, p)| p.1 < target)
-                .map(|(i, p)| (i, p.1, target.min(p.1.saturating_add(per_pixel))))
+                .filter(|(_, p)| p.count < target)
+                .map(|(i, p)| (i, p.count, target.min(p.count.saturating_add(per_pixel))))
                 .collect();
             if work.is_empty() {
                 break;
