@@ -3,7 +3,9 @@
 
 use crate::shared::printable;
 use crate::shared::threads::{pool, Pool};
-use crate::{bench_aggregate, conform, converge, diff, merge, new, plugins, render, stress, trace};
+use crate::{
+    bench_aggregate, conform, converge, diff, import, merge, new, plugins, render, stress, trace,
+};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -52,6 +54,9 @@ enum Command {
         #[arg(long)]
         check: bool,
     },
+    /// Translate a Mitsuba XML scene to rtk's TOML (docs/import.md),
+    /// refusing with file, line and column what has no exact equivalent.
+    Import(import::ImportArgs),
     /// Stitch crop films (`rtk render --crop ... -o PART.rtkfilm`) into the
     /// full image, bit for bit what a single render gives.
     Merge {
@@ -132,6 +137,7 @@ fn dispatch(cli: Cli, start: Instant, embedded: bool) -> anyhow::Result<()> {
                 plugins::list(&plugin_path, short)
             }
         }
+        Command::Import(a) => import::run(&a),
         Command::Merge { out, parts } => merge::run(&out, &parts),
         Command::New(a) => new::run(a),
         Command::Conform(a) if !a.in_process && !embedded => conform::run_in_child(),

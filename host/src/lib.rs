@@ -15,6 +15,7 @@ mod converge;
 mod diff;
 pub mod embed;
 pub mod fuzzing;
+mod import;
 mod merge;
 mod new;
 mod plugins;

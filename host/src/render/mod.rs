@@ -22,8 +22,11 @@ use tracer::Tracer;
 /// The arguments of `rtk render`.
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// The scene file (TOML).
+    /// The scene file: rtk's TOML, or Mitsuba XML (.xml), translated as
+    /// `rtk import` does.
     scene: PathBuf,
+    #[command(flatten)]
+    import: crate::import::ImportOptions,
     /// Output image: .png (8-bit sRGB) or .exr (linear float). Default:
     /// `[render] output`, else the scene's name with .png, in the current folder.
     #[arg(short, long, value_name = "FILE")]
@@ -118,7 +121,7 @@ pub fn run(a: RenderArgs, start: Instant) -> Result<()> {
         seconds("--checkpoint-every", a.checkpoint_every)?.unwrap_or(Duration::from_secs(60));
 
     let t_parse = Instant::now();
-    let (file, desc) = scene::read_scene(&a.scene, &sets, a.safe)?;
+    let (file, desc) = scene::read_any_scene(&a.scene, &sets, a.safe, &a.import)?;
     let parse_time = t_parse.elapsed();
 
     let out = output_path(&a, desc.render.output.as_deref());

@@ -15,6 +15,12 @@ struct Params {
     albedo: TextureParam,
     #[serde(default)]
     emission: [f32; 3],
+    #[serde(default = "yes")]
+    two_sided: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn half() -> TextureParam {
@@ -26,6 +32,9 @@ struct Lambert {
     albedo: Texture,
     /// Radiance emitted on the front side (black: it does not emit).
     le: Color,
+    /// Reflects on both sides; false: only where both directions lie on
+    /// the side the shading normal faces (Mitsuba's `diffuse`).
+    two_sided: bool,
 }
 
 impl Plugin for Lambert {
@@ -35,6 +44,7 @@ impl Plugin for Lambert {
         Ok(Lambert {
             albedo: p.albedo.reflectance("albedo", env)?,
             le: params::color("emission", p.emission)?,
+            two_sided: p.two_sided,
         })
     }
 }
@@ -44,6 +54,13 @@ impl Lambert {
     #[inline]
     fn f(&self, g: &LocalGeom) -> Color {
         self.albedo.at(g).scale(FRAC_1_PI)
+    }
+
+    /// Does a one-sided lambert see `w` from its back (the side the
+    /// shading normal does not face)? Then it reflects nothing.
+    #[inline]
+    fn behind(&self, g: &LocalGeom, w: Vec3) -> bool {
+        !self.two_sided && !(g.ns.v().dot(w) > 0.0)
     }
 }
 
@@ -59,7 +76,7 @@ impl Shader for Lambert {
 
     fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
         // Reflection only: both directions on the same side of the surface.
-        if same_side(g, wo, wi) {
+        if same_side(g, wo, wi) && !self.behind(g, wo) {
             self.f(g)
         } else {
             Color::BLACK
@@ -74,7 +91,7 @@ impl Shader for Lambert {
         u: [f32; 2],
         lobes: u32,
     ) -> Option<BsdfSample> {
-        if lobes & lobe::DIFFUSE == 0 || lobes & lobe::REFLECTION == 0 {
+        if lobes & lobe::DIFFUSE == 0 || lobes & lobe::REFLECTION == 0 || self.behind(g, wo) {
             return None;
         }
         cosine_lobe_sample(g, wo, u, lobe::DIFFUSE | lobe::REFLECTION, |_| self.f(g))
@@ -89,7 +106,7 @@ impl Shader for Lambert {
         lobes: u32,
     ) -> Option<f32> {
         let ours = lobe::DIFFUSE | lobe::REFLECTION;
-        Some(if lobes & ours == ours {
+        Some(if lobes & ours == ours && !self.behind(g, wo) {
             cosine_pdf(g, wo, wi)
         } else {
             0.0

@@ -1,0 +1,64 @@
+//! `<emitter>`s outside shapes → `[lights.*]`. Mitsuba's RGB variants
+//! use an `<rgb>` radiance or intensity as it is, so the values carry
+//! over unchanged.
+
+use super::{def, Props, Tx};
+use crate::error::ImportError;
+use crate::mitsuba::xml::Obj;
+use crate::rtk_scene::vec3;
+
+/// One light.
+pub fn light(tx: &mut Tx, e: &Obj) -> Result<(), ImportError> {
+    let mut p = Props::new(e);
+    let keys = match e.ty.as_str() {
+        "directional" => {
+            let mut k = def("directional");
+            let dir =
+                match p.transform("to_world")? {
+                    Some(t) if p.obj.prop("direction").is_none() => t.vector([0.0, 0.0, 1.0]),
+                    Some(_) => return Err(ImportError::invalid(
+                        &e.loc,
+                        "<emitter type=\"directional\">: give `direction` or `to_world`, not both",
+                    )),
+                    None => p.vec3("direction", [0.0, 0.0, 1.0])?,
+                };
+            k.push(("direction".into(), vec3(dir)));
+            let irr = p.color(tx, "irradiance")?.unwrap_or(vec3([1.0; 3]));
+            k.push(("irradiance".into(), irr));
+            k
+        }
+        "point" => {
+            let mut k = def("point");
+            let pos = match p.transform("to_world")? {
+                Some(t) => t.point([0.0; 3]),
+                None => p.vec3("position", [0.0; 3])?,
+            };
+            k.push(("position".into(), vec3(pos)));
+            let i = p.color(tx, "intensity")?.unwrap_or(vec3([1.0; 3]));
+            k.push(("intensity".into(), i));
+            k
+        }
+        "constant" => {
+            let mut k = def("constant");
+            let r = p.color(tx, "radiance")?.unwrap_or(vec3([1.0; 3]));
+            k.push(("radiance".into(), r));
+            k
+        }
+        "area" => {
+            return Err(ImportError::invalid(
+                &e.loc,
+                "an area emitter belongs inside the <shape> that emits",
+            ))
+        }
+        _ => {
+            return tx.refuse_plugin(
+                e,
+                "rtk translates the emitters directional, point, constant and area",
+            )
+        }
+    };
+    p.finish(tx)?;
+    let name = tx.out.fresh_name(e.id.as_deref().unwrap_or(&e.ty));
+    tx.out.lights.push((name, keys));
+    Ok(())
+}

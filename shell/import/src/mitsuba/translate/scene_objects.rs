@@ -1,0 +1,228 @@
+//! `<shape>`s → `[objects.*]` and instances of the root, their `<bsdf>`s
+//! and area `<emitter>`s → `[shaders.*]`.
+//!
+//! Mitsuba's `diffuse` is one-sided: black seen from behind the shading
+//! normal, unless wrapped in `twosided`. rtk's `lambert` says which with
+//! `two_sided`, so both translate exactly.
+
+use super::{def, steps, Props, Tx};
+use crate::error::ImportError;
+use crate::mitsuba::transform::Transform;
+use crate::mitsuba::xml::{Obj, Value};
+use crate::rtk_scene::{inline_table, vec3, Keys};
+use std::rc::Rc;
+use toml::Value as T;
+
+/// One shape: its object, its shader and its instance in `children`.
+pub fn shape(tx: &mut Tx, s: &Rc<Obj>, children: &mut Vec<T>) -> Result<(), ImportError> {
+    let mut p = Props::new(s);
+    let (keys, to_world, center) = match s.ty.as_str() {
+        "obj" | "ply" => (mesh(tx, &mut p)?, p.transform("to_world")?, None),
+        "sphere" => {
+            let mut k = def("sphere");
+            k.push(("radius".into(), T::Float(p.float("radius", 1.0)?)));
+            let c = p.vec3("center", [0.0; 3])?;
+            (k, p.transform("to_world")?, Some(c))
+        }
+        "rectangle" => {
+            let mut k = def("polygon");
+            let corners = [
+                [-1.0, -1.0, 0.0],
+                [1.0, -1.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [-1.0, 1.0, 0.0],
+            ];
+            k.push((
+                "points".into(),
+                T::Array(corners.iter().map(|c| vec3(*c)).collect()),
+            ));
+            (k, p.transform("to_world")?, None)
+        }
+        _ => {
+            return tx.refuse_plugin(
+                s,
+                "rtk translates the shapes obj, ply, sphere and rectangle",
+            )
+        }
+    };
+    p.only_default(
+        tx,
+        "flip_normals",
+        &Value::Bool(false),
+        "rtk does not flip a shape's normals",
+    )?;
+    p.finish(tx)?;
+    let Some(shader) = shape_shader(tx, s)? else {
+        return Ok(());
+    };
+    let hint =
+        s.id.clone()
+            .unwrap_or_else(|| file_stem(s).unwrap_or_else(|| s.ty.clone()));
+    let name = tx.out.fresh_name(&hint);
+    tx.out.objects.push((name.clone(), keys));
+    let mut inst = vec![
+        ("object".into(), T::String(name)),
+        ("shader".into(), T::String(shader)),
+    ];
+    let mut t = Transform::identity();
+    if let Some(c) = center.filter(|c| *c != [0.0; 3]) {
+        t.translate(c);
+    }
+    if let Some(w) = to_world {
+        for st in &w.steps {
+            t.steps.push(st.clone());
+        }
+    }
+    if !t.steps.is_empty() {
+        inst.push(("transform".into(), steps(&t)));
+    }
+    children.push(inline_table(inst));
+    Ok(())
+}
+
+/// `obj`/`ply` → `mesh`. Mitsuba uses the file's vertex normals, or
+/// computes them, unless `face_normals`; rtk's `vertex` does the same.
+fn mesh(tx: &mut Tx, p: &mut Props) -> Result<Keys, ImportError> {
+    let mut k = def("mesh");
+    let Some(f) = p.get("filename") else {
+        return Err(ImportError::invalid(
+            &p.obj.loc,
+            format!("{} needs `filename`", p.obj.what()),
+        ));
+    };
+    let Value::Str(name) = &f.value else {
+        return Err(ImportError::invalid(&f.loc, "`filename` is a <string>"));
+    };
+    k.push(("file".into(), T::String(tx.file(&f.loc, name)?)));
+    let face = p.bool("face_normals", false)?;
+    k.push((
+        "normals".into(),
+        T::String(if face { "face" } else { "vertex" }.into()),
+    ));
+    // Texture coordinates are not used by any translated material yet.
+    p.ignore(&["flip_tex_coords"]);
+    Ok(k)
+}
+
+fn file_stem(s: &Obj) -> Option<String> {
+    match &s.prop("filename")?.value {
+        Value::Str(f) => std::path::Path::new(f)
+            .file_stem()
+            .map(|x| x.to_string_lossy().into_owned()),
+        _ => None,
+    }
+}
+
+/// The shader of shape `s`: its BSDF's (Mitsuba's default, a one-sided
+/// `diffuse` of 0.5, when it has none), with the emission of its area
+/// emitter. `None` when lenient dropped it.
+fn shape_shader(tx: &mut Tx, s: &Obj) -> Result<Option<String>, ImportError> {
+    let bsdfs: Vec<_> = s.children_tagged("bsdf").collect();
+    let emitters: Vec<_> = s.children_tagged("emitter").collect();
+    for c in s
+        .children
+        .iter()
+        .filter(|c| c.tag != "bsdf" && c.tag != "emitter")
+    {
+        tx.refuse_plugin(c, "not translated inside a shape")?;
+    }
+    if bsdfs.len() > 1 {
+        return Err(ImportError::invalid(&bsdfs[1].loc, "a shape has one BSDF"));
+    }
+    if emitters.len() > 1 || emitters.first().is_some_and(|e| e.ty != "area") {
+        let e = emitters
+            .iter()
+            .find(|e| e.ty != "area")
+            .unwrap_or(&emitters[0]);
+        tx.refuse_plugin(e, "a shape carries one area emitter")?;
+        return Ok(None);
+    }
+    let Some(e) = emitters.first() else {
+        return Ok(match bsdfs.first() {
+            Some(b) => bsdf_shader(tx, b)?,
+            None => Some(default_diffuse(tx)),
+        });
+    };
+    // An emitter: its own shader, the BSDF's keys with the emission.
+    let mut keys = match bsdfs.first() {
+        Some(b) => match bsdf_keys(tx, b)? {
+            Some(k) => k,
+            None => return Ok(None),
+        },
+        None => diffuse_keys(vec3([0.5; 3]), false),
+    };
+    let mut p = Props::new(e);
+    let radiance = p.color(tx, "radiance")?.unwrap_or(vec3([1.0; 3]));
+    p.finish(tx)?;
+    keys.push(("emission".into(), radiance));
+    let name = tx
+        .out
+        .fresh_name(&format!("{}_emitter", s.id.as_deref().unwrap_or("area")));
+    tx.out.shaders.push((name.clone(), keys));
+    Ok(Some(name))
+}
+
+fn diffuse_keys(albedo: T, two_sided: bool) -> Keys {
+    let mut k = def("lambert");
+    k.push(("albedo".into(), albedo));
+    if !two_sided {
+        k.push(("two_sided".into(), T::Boolean(false)));
+    }
+    k
+}
+
+/// The shader for shapes without a BSDF.
+fn default_diffuse(tx: &mut Tx) -> String {
+    let name = "mitsuba_default_diffuse";
+    if !tx.out.shaders.iter().any(|(n, _)| n == name) {
+        tx.out
+            .shaders
+            .push((name.into(), diffuse_keys(vec3([0.5; 3]), false)));
+    }
+    name.into()
+}
+
+/// The shader of BSDF `b`, translated once however many shapes use it.
+fn bsdf_shader(tx: &mut Tx, b: &Rc<Obj>) -> Result<Option<String>, ImportError> {
+    let key = Rc::as_ptr(b);
+    if let Some((_, n)) = tx.shaders.iter().find(|(p, _)| *p == key) {
+        return Ok(Some(n.clone()));
+    }
+    let Some(keys) = bsdf_keys(tx, b)? else {
+        return Ok(None);
+    };
+    let name = tx.out.fresh_name(b.id.as_deref().unwrap_or(&b.ty));
+    tx.out.shaders.push((name.clone(), keys));
+    tx.shaders.push((key, name.clone()));
+    Ok(Some(name))
+}
+
+/// A BSDF's shader keys; `None` when lenient dropped it.
+fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let two_sided = b.ty == "twosided";
+    let inner: &Obj = if two_sided {
+        let nested: Vec<_> = b.children_tagged("bsdf").collect();
+        let [one] = nested[..] else {
+            tx.refuse_plugin(
+                b,
+                "a twosided BSDF with two different sides is not translated",
+            )?;
+            return Ok(None);
+        };
+        Props::new(b).finish(tx)?;
+        one
+    } else {
+        b
+    };
+    if inner.ty != "diffuse" {
+        tx.refuse_plugin(
+            inner,
+            "rtk translates the BSDFs diffuse and twosided(diffuse) so far",
+        )?;
+        return Ok(None);
+    }
+    let mut p = Props::new(inner);
+    let albedo = p.color(tx, "reflectance")?.unwrap_or(vec3([0.5; 3]));
+    p.finish(tx)?;
+    Ok(Some(diffuse_keys(albedo, two_sided)))
+}
