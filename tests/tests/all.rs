@@ -14,6 +14,7 @@ mod interior;
 mod loading;
 mod long_renders;
 mod materials;
+mod mitsuba;
 mod motion;
 mod objects;
 mod panics;

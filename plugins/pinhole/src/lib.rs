@@ -19,6 +19,14 @@ struct Params {
     fov_y: f32,
     #[serde(default)]
     keyframes: Vec<Key>,
+    #[serde(default)]
+    near_clip: f32,
+    #[serde(default = "no_far_clip")]
+    far_clip: f32,
+}
+
+fn no_far_clip() -> f32 {
+    f32::INFINITY
 }
 
 /// A pose of a moving camera.
@@ -55,6 +63,9 @@ struct Pinhole {
     /// One pose, or the keyframes in time order (the camera moves over the
     /// shutter: `--frame` animations, camera motion blur).
     frames: Vec<Frame>,
+    /// Depths along the view direction between which the camera sees:
+    /// clipping planes (Mitsuba's `near_clip`, `far_clip`).
+    clip: [f32; 2],
 }
 
 impl Pinhole {
@@ -97,9 +108,17 @@ impl Plugin for Pinhole {
                 up: f.up * f.tan_half,
             })
         };
+        if !(p.near_clip >= 0.0 && p.near_clip.is_finite()) {
+            return Err(PluginError::key("near_clip", "must be finite and ≥ 0"));
+        }
+        if !(p.far_clip > p.near_clip) {
+            return Err(PluginError::key("far_clip", "must exceed near_clip"));
+        }
+        let clip = [p.near_clip, p.far_clip];
         if p.keyframes.is_empty() {
             return Ok(Pinhole {
                 frames: vec![frame(0.0, p.eye, p.look_at)?],
+                clip,
             });
         }
         let mut frames = Vec::with_capacity(p.keyframes.len());
@@ -117,7 +136,7 @@ impl Plugin for Pinhole {
                 message: e.message,
             })?);
         }
-        Ok(Pinhole { frames })
+        Ok(Pinhole { frames, clip })
     }
 }
 
@@ -129,6 +148,12 @@ impl Camera for Pinhole {
         let dir = (f.forward + f.right * sx + f.up * sy).normalize();
         let mut ray = Ray::new(f.eye, dir);
         ray.time = s.time;
+        if self.clip != [0.0, f32::INFINITY] {
+            // Depth along the view axis is t·cos, cos = dir · forward.
+            let cos = dir.dot(f.forward.normalize());
+            ray.t_min = self.clip[0] / cos;
+            ray.t_max = self.clip[1] / cos;
+        }
         Some(CameraRay { ray, weight: 1.0 })
     }
 }

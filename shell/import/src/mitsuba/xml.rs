@@ -139,7 +139,8 @@ pub struct Document {
     pub params: Vec<Param>,
     /// The `version` of the top-level file.
     pub version: (u32, u32, u32),
-    /// The `<path>` folders, in declaration order.
+    /// Where file names are looked for, in order: the `<path>` folders
+    /// (the last declared first), then the top-level file's folder.
     pub search: Vec<PathBuf>,
 }
 
@@ -155,7 +156,7 @@ pub fn read(path: &Path, given: &[(String, String)]) -> Result<Document, ImportE
             })
             .collect(),
         ids: HashMap::new(),
-        search: Vec::new(),
+        search: vec![path.parent().unwrap_or(Path::new(".")).to_path_buf()],
         stack: Vec::new(),
         version: (3, 0, 0),
     };
@@ -316,7 +317,21 @@ impl Parser {
                 "default" => self.default(node, &loc)?,
                 "path" => {
                     let v = self.attr(node, "value", &loc)?.0;
-                    self.search.push(relative_to(&f.path, &v));
+                    let dir = relative_to(&f.path, &v);
+                    let dir = if dir.is_dir() {
+                        Some(dir)
+                    } else {
+                        find(&self.search, &v)
+                    };
+                    match dir.filter(|d| d.is_dir()) {
+                        Some(d) => self.search.insert(0, d),
+                        None => {
+                            return Err(ImportError::invalid(
+                                &loc,
+                                format!("<path value=\"{v}\">: no such folder"),
+                            ))
+                        }
+                    }
                 }
                 "include" => self.include(f, node, &loc, scene)?,
                 "alias" => {
@@ -464,16 +479,15 @@ impl Parser {
         Ok((out, whole))
     }
 
-    /// A file name resolved as [`Document::resolve`] does.
+    /// An `<include>`d file name resolved as Mitsuba does: beside the
+    /// including file, then beside each file including that one, then as
+    /// any file name ([`Document::resolve`]).
     fn resolve(&self, from: &Path, name: &str) -> PathBuf {
-        let direct = relative_to(from, name);
-        if direct.exists() || Path::new(name).is_absolute() {
-            return direct;
-        }
-        (self.search.iter().rev())
-            .map(|d| d.join(name))
-            .find(|p| p.exists())
-            .unwrap_or(direct)
+        let mut dirs = vec![from.parent().unwrap_or(Path::new(".")).to_path_buf()];
+        let parents = self.stack.iter().rev().filter_map(|p| p.parent());
+        dirs.extend(parents.map(Path::to_path_buf));
+        dirs.extend(self.search.iter().cloned());
+        find(&dirs, name).unwrap_or_else(|| relative_to(from, name))
     }
 }
 
@@ -793,19 +807,21 @@ fn canonical(p: &Path) -> PathBuf {
 }
 
 impl Document {
-    /// A file name given in the scene at `from`, resolved as Mitsuba's
-    /// file resolver does: relative to the file that names it, else to the
-    /// `<path>` folders, the last declared first.
+    /// A file name a plugin gives (a mesh, a texture), resolved as
+    /// Mitsuba's file resolver does when the scene is instantiated: in the
+    /// `<path>` folders, the last declared first, then the top-level
+    /// file's folder; failing those, beside the file that names it.
     pub fn resolve(&self, from: &Loc, name: &str) -> PathBuf {
-        let direct = relative_to(&from.file, name);
-        if direct.exists() || Path::new(name).is_absolute() {
-            return direct;
-        }
-        (self.search.iter().rev())
-            .map(|d| d.join(name))
-            .find(|p| p.exists())
-            .unwrap_or(direct)
+        find(&self.search, name).unwrap_or_else(|| relative_to(&from.file, name))
     }
+}
+
+/// The first of `dirs` holding `name` (or `name` itself when absolute).
+fn find(dirs: &[PathBuf], name: &str) -> Option<PathBuf> {
+    if Path::new(name).is_absolute() {
+        return Some(PathBuf::from(name));
+    }
+    dirs.iter().map(|d| d.join(name)).find(|p| p.exists())
 }
 
 #[cfg(test)]

@@ -85,6 +85,13 @@ fn one_integrator(tx: &mut Tx, i: &Obj) -> Result<Keys, ImportError> {
             p.only_default(tx, "hide_emitters", &Value::Bool(false), refuse_hidden)?;
             path_keys((max_depth > 0).then_some(max_depth), rr_depth)
         }
+        "volpath" | "volpathmis" => {
+            return Err(ImportError::unsupported(
+                &i.loc,
+                i.what(),
+                "participating media are refused: rtk's importer does not translate media (docs/import.md)",
+            ))
+        }
         _ => {
             return Err(ImportError::unsupported(
                 &i.loc,
@@ -125,9 +132,8 @@ pub fn sensor(tx: &mut Tx, scene: &Obj) -> Result<(), ImportError> {
         * ((0.5 * fov_x.to_radians()).tan() / aspect)
             .atan()
             .to_degrees();
-    let clip = "rtk's pinhole has no clipping planes; only Mitsuba's defaults (near 0.01, far 10000) are accepted";
-    p.only_default(tx, "near_clip", &Value::Float(1e-2), clip)?;
-    p.only_default(tx, "far_clip", &Value::Float(1e4), clip)?;
+    let near = p.float("near_clip", 1e-2)?;
+    let far = p.float("far_clip", 1e4)?;
     for n in ["principal_point_offset_x", "principal_point_offset_y"] {
         p.only_default(
             tx,
@@ -148,6 +154,9 @@ pub fn sensor(tx: &mut Tx, scene: &Obj) -> Result<(), ImportError> {
     cam.push(("look_at".into(), vec3(look_at)));
     cam.push(("up".into(), vec3(up)));
     cam.push(("fov_y".into(), T::Float(fov_y)));
+    // Mitsuba always clips (its defaults too): so does the translation.
+    cam.push(("near_clip".into(), T::Float(near)));
+    cam.push(("far_clip".into(), T::Float(far)));
     p.finish(tx)?;
     let name = tx.out.fresh_name(s.id.as_deref().unwrap_or("camera"));
     tx.out.cameras.push((name.clone(), cam));
