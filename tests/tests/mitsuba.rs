@@ -13,7 +13,10 @@ use std::path::{Path, PathBuf};
 /// The scenes that pass today. Any other scene must be refused; a scene
 /// newly translated must be added here (or the test says it passed
 /// unlisted).
-const PASSING: &[&str] = &["floating_sphere/test_directional_direct"];
+const PASSING: &[&str] = &[
+    "floating_sphere/test_directional_direct",
+    "texture_interp/test_texture_interp_direct",
+];
 
 /// A render test: its scene file, integrator and reference images.
 struct RenderTest {
@@ -146,10 +149,16 @@ fn a_two_percent_brighter_light_fails_the_z_test_in_every_passing_scene() {
     };
     let dir = tempfile::tempdir().unwrap();
     // The one light (or emitter) of each passing scene, 2 % brighter.
-    let brighter: &[(&str, &str)] = &[(
-        "floating_sphere/test_directional_direct",
-        "lights.directional.irradiance=[1.02, 1.02, 1.02]",
-    )];
+    let brighter: &[(&str, &str)] = &[
+        (
+            "floating_sphere/test_directional_direct",
+            "lights.directional.irradiance=[1.02, 1.02, 1.02]",
+        ),
+        (
+            "texture_interp/test_texture_interp_direct",
+            "lights.point.intensity=[102.0, 102.0, 102.0]",
+        ),
+    ];
     assert_eq!(
         brighter.len(),
         PASSING.len(),

@@ -10,7 +10,7 @@
 //! | 8 | FNV-1a 64 hash of the scene text and its `--set` overrides (those of the settings below excepted) |
 //! | 4 × 3 | full width, full height, spp |
 //! | 8 | seed |
-//! | 4 | pixel filter: 0 none, 1 box, 2 tent, 3 gaussian |
+//! | 4 | pixel filter: 0 none, 1 box, 2 tent, 3 gaussian, 4 mitsuba_gaussian |
 //! | 4 | sampler: 0 independent, 1 stratified |
 //! | 4 × 4 | the rectangle held: x0, y0, x1, y1 |
 //! | 52 per pixel | row-major over the rectangle: the f64 sums of R, G, B, the f64 sums of their squares, then the u32 sample count |
@@ -95,6 +95,7 @@ impl Header {
                 Some(Filter::Box) => 1,
                 Some(Filter::Tent) => 2,
                 Some(Filter::Gaussian) => 3,
+                Some(Filter::MitsubaGaussian) => 4,
             },
             sampler: r.stratified as u32,
         }
@@ -104,7 +105,7 @@ impl Header {
     /// a render with header `want`, if it cannot.
     pub fn check_matches(&self, want: &Header, file: &Path, scene: &Path) -> Result<()> {
         let filter_name = |f: u32| {
-            ["none", "box", "tent", "gaussian"]
+            ["none", "box", "tent", "gaussian", "mitsuba_gaussian"]
                 .get(f as usize)
                 .copied()
                 .unwrap_or("?")
@@ -257,7 +258,7 @@ fn read_header(path: &Path, r: &mut impl Read, len: u64) -> Result<(Header, Rect
         x1: u32_at(&head, 52),
         y1: u32_at(&head, 56),
     };
-    if header.filter > 3
+    if header.filter > 4
         || header.sampler > 1
         || !(1..=65536).contains(&header.width)
         || !(1..=65536).contains(&header.height)

@@ -341,7 +341,37 @@ fn film_offset(
             }
             (0.5, 0.5)
         }
+        // Drawn per axis by `mitsuba_gaussian_offset`, which needs the
+        // pixel's place in the image (`Job::camera_sample` calls it).
+        Some(Filter::MitsubaGaussian) => (0.5, 0.5),
     }
+}
+
+/// Mitsuba's Gaussian pixel filter along one axis, for the pixel at
+/// `pixel` of an image `size` pixels long: an offset from the pixel's
+/// corner drawn with density ∝ max(0, exp(−x²/2σ²) − exp(−r²/2σ²)),
+/// σ = 0.5, r = 2, around the centre, and never outside [0, size) (the
+/// part of the footprint inside the image, renormalised, as Mitsuba's film
+/// weighs a border pixel). By rejection from a normal draw: exact.
+#[inline]
+fn mitsuba_gaussian_offset(pixel: u32, size: u32, rng: &mut RngState) -> f32 {
+    const SIGMA: f32 = 0.5;
+    const RADIUS: f32 = 2.0;
+    let floor = (-RADIUS * RADIUS / (2.0 * SIGMA * SIGMA)).exp();
+    for _ in 0..256 {
+        let (u1, u2, u3) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let x = SIGMA * (-2.0 * (1.0 - u1).ln()).sqrt() * (std::f32::consts::TAU * u2).cos();
+        let at = pixel as f32 + 0.5 + x;
+        if x.abs() > RADIUS || !(at >= 0.0 && at < size as f32) {
+            continue;
+        }
+        // Accept with (g(x) − g(r)) / g(x).
+        let g = (-x * x / (2.0 * SIGMA * SIGMA)).exp();
+        if u3 * g < g - floor {
+            return 0.5 + x;
+        }
+    }
+    0.5
 }
 
 /// Render the world's image on the pool's threads into `film` (of the
@@ -682,7 +712,13 @@ impl Job<'_, '_> {
         sink: &mut S,
     ) -> bool {
         ctx.rng = RngState::for_sample(self.seed, pixel, s as u64);
-        let (jx, jy) = film_offset(self.filter, s, self.spp, self.stratified, &mut ctx.rng);
+        let (jx, jy) = match self.filter {
+            Some(Filter::MitsubaGaussian) => (
+                mitsuba_gaussian_offset(x, self.width, &mut ctx.rng),
+                mitsuba_gaussian_offset(y, self.height, &mut ctx.rng),
+            ),
+            f => film_offset(f, s, self.spp, self.stratified, &mut ctx.rng),
+        };
         let sample = CameraSample {
             film: [
                 (x as f32 + jx) / self.width as f32,
@@ -836,6 +872,48 @@ mod tests {
         // Not a square: independent, anywhere in the pixel.
         let (x, y) = film_offset(Some(Filter::Box), 3, 5, true, &mut rng);
         assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+    }
+
+    #[test]
+    fn mitsubas_gaussian_has_its_density_and_stays_inside_the_image() {
+        // Density ∝ exp(−2x²) − exp(−8) on [−2, 2], x from the centre.
+        let w = |x: f64| ((-2.0 * x * x).exp() - (-8.0f64).exp()).max(0.0);
+        let mut rng = RngState::seeded(3);
+        let n = 400_000;
+        let bins = 16;
+        let mut hist = vec![0u32; bins];
+        for _ in 0..n {
+            let x = mitsuba_gaussian_offset(10, 100, &mut rng) as f64 - 0.5;
+            assert!(x.abs() <= 2.0);
+            hist[(((x + 2.0) / 4.0 * bins as f64) as usize).min(bins - 1)] += 1;
+        }
+        // Expected bin shares by the midpoint rule on a fine grid.
+        let share = |a: f64, b: f64| {
+            (0..100)
+                .map(|k| w(a + (b - a) * (k as f64 + 0.5) / 100.0))
+                .sum::<f64>()
+                * (b - a)
+                / 100.0
+        };
+        let total = share(-2.0, 2.0);
+        for (i, &h) in hist.iter().enumerate() {
+            let (a, b) = (
+                -2.0 + 4.0 * i as f64 / bins as f64,
+                -2.0 + 4.0 * (i + 1) as f64 / bins as f64,
+            );
+            let p = share(a, b) / total;
+            let sd = (p * (1.0 - p) / n as f64).sqrt();
+            let got = h as f64 / n as f64;
+            assert!(
+                (got - p).abs() < 5.0 * sd + 1e-6,
+                "bin {i}: {got} against {p}"
+            );
+        }
+        // Pixel 0 of a 100-pixel row: never left of the image.
+        for _ in 0..10_000 {
+            assert!(mitsuba_gaussian_offset(0, 100, &mut rng) >= 0.0);
+            assert!(mitsuba_gaussian_offset(99, 100, &mut rng) < 1.0 + 0.0);
+        }
     }
 
     #[test]

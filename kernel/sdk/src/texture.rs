@@ -12,6 +12,11 @@
 //!
 //! Textures are looked up at the hit's surface parameterisation
 //! ([`LocalGeom::uv`]), scaled by `scale` and repeated outside [0, 1)².
+//! An image texture may also say how uv finds its texels ([`Lookup`]):
+//! `to_uv = [a, b, c, d, e, f]` (u' = a u + b v + c, v' = d u + e v + f),
+//! `wrap = "repeat" | "mirror" | "clamp"`, `filter = "bilinear" |
+//! "nearest"`, `v_origin = "bottom" | "top"` — Mitsuba's `bitmap`
+//! options, with drjit's rules for wrapping texel indices.
 //!
 //! - **checker**: cell `(⌊u·su⌋, ⌊v·sv⌋)` takes `even` when the sum of its
 //!   indices is even, else `odd`; `scale` defaults to [8, 8] (8 × 8 cells
@@ -69,7 +74,69 @@ pub enum TextureParam {
         file: String,
         /// Repetitions per unit of u and of v.
         scale: [f32; 2],
+        /// How uv finds texels.
+        lookup: Lookup,
     },
+}
+
+/// How an image texture maps uv to texels. The defaults are rtk's own
+/// (and OpenGL's): bilinear, repeating, v = 0 at the bottom row; the
+/// others are what Mitsuba's `bitmap` offers, so that `rtk import`
+/// translates it exactly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lookup {
+    /// An affine map of uv applied before the lookup, row-major 2 x 3:
+    /// u' = a u + b v + c, v' = d u + e v + f (Mitsuba's `to_uv`).
+    pub to_uv: Option<[f32; 6]>,
+    /// Outside [0, 1): repeat, mirror or clamp (to the edge texels).
+    pub wrap: Wrap,
+    /// Nearest texel, or bilinear between texel centres.
+    pub nearest: bool,
+    /// v = 0 at the image's top row (Mitsuba's convention) instead of its
+    /// bottom row.
+    pub v_top: bool,
+}
+
+impl Default for Lookup {
+    fn default() -> Self {
+        Lookup {
+            to_uv: None,
+            wrap: Wrap::Repeat,
+            nearest: false,
+            v_top: false,
+        }
+    }
+}
+
+/// What an image texture shows outside [0, 1)².
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    /// Tiled.
+    Repeat,
+    /// Tiled, every other tile mirrored.
+    Mirror,
+    /// The edge texels extended.
+    Clamp,
+}
+
+impl Wrap {
+    /// Texel index `i` of a row or column of `n`, wrapped into [0, n) —
+    /// drjit's `tex_wrap`, the one Mitsuba's textures use.
+    #[inline]
+    fn index(self, i: i64, n: i64) -> i64 {
+        match self {
+            Wrap::Clamp => i.clamp(0, n - 1),
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::Mirror => {
+                let (k, m) = (i.div_euclid(n), i.rem_euclid(n));
+                if k & 1 == 0 {
+                    m
+                } else {
+                    n - 1 - m
+                }
+            }
+        }
+    }
 }
 
 impl TextureParam {
@@ -96,8 +163,15 @@ impl TextureParam {
                     scale: check_scale(&format!("{k}.scale"), *scale)?,
                 }
             }
-            TextureParam::Image { file, scale } => {
+            TextureParam::Image {
+                file,
+                scale,
+                lookup,
+            } => {
                 let scale = check_scale(&format!("{key}.scale"), *scale)?;
+                if let Some(m) = &lookup.to_uv {
+                    params::finite(&format!("{key}.to_uv"), m)?;
+                }
                 let k = format!("{key}.image_file");
                 let path = env.resolve(file);
                 let img = TexImage::load(&path)
@@ -108,7 +182,11 @@ impl TextureParam {
                         PluginError::key(&k, format!("texel ({x}, {y}) {:?}: {}", t, e.message))
                     })?;
                 }
-                Kind::Image { img, scale }
+                Kind::Image {
+                    img,
+                    scale,
+                    lookup: *lookup,
+                }
             }
         };
         Ok(Texture { kind })
@@ -151,6 +229,7 @@ enum Kind {
     Image {
         img: TexImage,
         scale: [f32; 2],
+        lookup: Lookup,
     },
 }
 
@@ -192,7 +271,17 @@ impl Texture {
                     *odd
                 }
             }
-            Kind::Image { img, scale } => img.bilinear(uv[0] * scale[0], uv[1] * scale[1]),
+            Kind::Image { img, scale, lookup } if *lookup == Lookup::default() => {
+                img.bilinear(uv[0] * scale[0], uv[1] * scale[1])
+            }
+            Kind::Image { img, scale, lookup } => {
+                let (u, v) = (uv[0] * scale[0], uv[1] * scale[1]);
+                let (u, v) = match lookup.to_uv {
+                    Some(m) => (m[0] * u + m[1] * v + m[2], m[3] * u + m[4] * v + m[5]),
+                    None => (u, v),
+                };
+                img.lookup(u, v, lookup)
+            }
         }
     }
 }
@@ -295,6 +384,43 @@ impl TexImage {
     }
 }
 
+impl TexImage {
+    /// The general lookup ([`Lookup`]): texel coordinates x = u·w (− ½
+    /// for bilinear), y likewise from the top or the bottom, indices
+    /// wrapped one by one, as drjit's textures do.
+    fn lookup(&self, u: f32, v: f32, l: &Lookup) -> Color {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let v = if l.v_top { v } else { 1.0 - v };
+        let at = |x: i64, y: i64| {
+            let (x, y) = (l.wrap.index(x, w), l.wrap.index(y, h));
+            self.texels[(y * w + x) as usize]
+        };
+        // Far outside [0, 1) (or NaN) the index saturates; wrapped, it
+        // still names a texel.
+        let (x, y) = (u * w as f32, v * h as f32);
+        if l.nearest {
+            return Color::from_array(at(x.floor() as i64, y.floor() as i64));
+        }
+        let (x, y) = (x - 0.5, y - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let mut c = [0.0f32; 3];
+        for (dx, dy, wt) in [
+            (0, 0, (1.0 - fx) * (1.0 - fy)),
+            (1, 0, fx * (1.0 - fy)),
+            (0, 1, (1.0 - fx) * fy),
+            (1, 1, fx * fy),
+        ] {
+            let t = at(x0.saturating_add(dx), y0.saturating_add(dy));
+            for k in 0..3 {
+                c[k] += wt * t[k];
+            }
+        }
+        Color::from_array(c)
+    }
+}
+
 /// Read a whole regular file of at most `max` bytes (a FIFO or a device is
 /// refused before it is opened, a file that grows is cut off and refused).
 fn read_limited(path: &Path, max: u64) -> Result<Vec<u8>, String> {
@@ -330,6 +456,50 @@ struct Table {
     checker: Option<CheckerTable>,
     image_file: Option<String>,
     scale: Option<[f32; 2]>,
+    to_uv: Option<[f32; 6]>,
+    wrap: Option<String>,
+    filter: Option<String>,
+    v_origin: Option<String>,
+}
+
+impl Table {
+    /// The image lookup the table asks for (defaults: [`Lookup::default`]).
+    fn lookup<E: de::Error>(&self) -> Result<Lookup, E> {
+        let wrap = match self.wrap.as_deref() {
+            None | Some("repeat") => Wrap::Repeat,
+            Some("mirror") => Wrap::Mirror,
+            Some("clamp") => Wrap::Clamp,
+            Some(o) => {
+                return Err(E::custom(format!(
+                    "wrap `{o}`: use \"repeat\", \"mirror\" or \"clamp\""
+                )))
+            }
+        };
+        let nearest = match self.filter.as_deref() {
+            None | Some("bilinear") => false,
+            Some("nearest") => true,
+            Some(o) => {
+                return Err(E::custom(format!(
+                    "filter `{o}`: use \"bilinear\" or \"nearest\""
+                )))
+            }
+        };
+        let v_top = match self.v_origin.as_deref() {
+            None | Some("bottom") => false,
+            Some("top") => true,
+            Some(o) => {
+                return Err(E::custom(format!(
+                    "v_origin `{o}`: use \"bottom\" or \"top\""
+                )))
+            }
+        };
+        Ok(Lookup {
+            to_uv: self.to_uv,
+            wrap,
+            nearest,
+            v_top,
+        })
+    }
 }
 
 #[derive(Deserialize)]
@@ -369,6 +539,14 @@ impl<'de> Visitor<'de> for TextureVisitor {
 
     fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
         let t = Table::deserialize(de::value::MapAccessDeserializer::new(map))?;
+        let image_only =
+            t.to_uv.is_some() || t.wrap.is_some() || t.filter.is_some() || t.v_origin.is_some();
+        if t.checker.is_some() && image_only {
+            return Err(de::Error::custom(
+                "`to_uv`, `wrap`, `filter` and `v_origin` belong to an `image_file` texture",
+            ));
+        }
+        let lookup = t.lookup()?;
         match (t.checker, t.image_file) {
             (Some(c), None) => {
                 if t.scale.is_some() {
@@ -385,6 +563,7 @@ impl<'de> Visitor<'de> for TextureVisitor {
             (None, Some(file)) => Ok(TextureParam::Image {
                 file,
                 scale: t.scale.unwrap_or([1.0, 1.0]),
+                lookup,
             }),
             (Some(_), Some(_)) => Err(de::Error::custom(
                 "a texture is either a `checker` or an `image_file`, not both",
@@ -538,6 +717,67 @@ mod tests {
         let p: P = parse_params(r#"{"albedo": {"image_file": "."}}"#).unwrap();
         let e = p.albedo.reflectance("albedo", &env(dir_s)).unwrap_err();
         assert!(e.message.contains("not a regular file"), "{e}");
+    }
+
+    /// Mitsuba's lookups on a 4 x 1 row of greys 0.1, 0.2, 0.3, 0.4
+    /// (linear, EXR): nearest and bilinear, repeat, mirror and clamp
+    /// (drjit's rules), `to_uv`, and v from the top.
+    #[test]
+    fn wrap_modes_filters_and_to_uv_follow_drjit() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = image::Rgb32FImage::new(4, 2);
+        for x in 0..4 {
+            let g = 0.1 * (x + 1) as f32;
+            img.put_pixel(x, 0, image::Rgb([g; 3]));
+            img.put_pixel(x, 1, image::Rgb([0.9; 3]));
+        }
+        image::DynamicImage::ImageRgb32F(img)
+            .save(dir.path().join("row.exr"))
+            .unwrap();
+        let dir_s = dir.path().to_str().unwrap();
+        let tex = |extra: &str| {
+            let json = format!(r#"{{"albedo": {{"image_file": "row.exr"{extra}}}}}"#);
+            let p: P = parse_params(&json).unwrap();
+            p.albedo.reflectance("albedo", &env(dir_s)).unwrap()
+        };
+        let g = |t: &Texture, u: f32, v: f32| t.eval([u, v]).to_array()[0];
+        // Nearest, v from the top: row 0 for v in [0, 0.5).
+        let t = tex(r#", "filter": "nearest", "v_origin": "top", "wrap": "clamp""#);
+        assert!((g(&t, 0.3, 0.25) - 0.2).abs() < 1e-6);
+        assert!(
+            (g(&t, -0.3, 0.25) - 0.1).abs() < 1e-6,
+            "clamped to the first texel"
+        );
+        assert!((g(&t, 1.7, 0.25) - 0.4).abs() < 1e-6);
+        let t = tex(r#", "filter": "nearest", "v_origin": "top", "wrap": "mirror""#);
+        // u = -0.1 → texel -1 → mirrored to 0; u = 1.1 → texel 4 → 3.
+        assert!((g(&t, -0.1, 0.25) - 0.1).abs() < 1e-6);
+        assert!((g(&t, 1.1, 0.25) - 0.4).abs() < 1e-6);
+        assert!((g(&t, 1.3, 0.25) - 0.3).abs() < 1e-6, "texel 5 → 2");
+        let t = tex(r#", "filter": "nearest", "v_origin": "top", "wrap": "repeat""#);
+        assert!((g(&t, -0.1, 0.25) - 0.4).abs() < 1e-6);
+        // Bilinear, clamp: at u = 0 (x = -0.5) both taps are texel 0.
+        let t = tex(r#", "v_origin": "top", "wrap": "clamp""#);
+        assert!((g(&t, 0.0, 0.25) - 0.1).abs() < 1e-6);
+        assert!(
+            (g(&t, 0.25, 0.25) - 0.15).abs() < 1e-6,
+            "halfway between 0.1 and 0.2"
+        );
+        // Bilinear, mirror: at u = 0 the taps are texels -1 → 0 and 0.
+        let t = tex(r#", "v_origin": "top", "wrap": "mirror""#);
+        assert!((g(&t, 0.0, 0.25) - 0.1).abs() < 1e-6);
+        // to_uv: u' = 2u − 0.5, so u = 0.4 looks at u' = 0.3 (texel 1).
+        let t = tex(r#", "filter": "nearest", "v_origin": "top", "to_uv": [2, 0, -0.5, 0, 1, 0]"#);
+        assert!((g(&t, 0.4, 0.25) - 0.2).abs() < 1e-6);
+        // The default orientation: v = 0.25 is the bottom row.
+        let t = tex(r#", "filter": "nearest""#);
+        assert!((g(&t, 0.3, 0.25) - 0.9).abs() < 1e-6);
+        // Misspelt modes are refused, naming the key.
+        let e = parse_params::<P>(r#"{"albedo": {"image_file": "row.exr", "wrap": "tile"}}"#)
+            .unwrap_err();
+        assert!(e.message.contains("wrap `tile`"), "{e}");
+        let e = parse_params::<P>(r#"{"albedo": {"checker": {}, "wrap": "clamp"}}"#).unwrap_err();
+        assert!(e.message.contains("belong to an `image_file`"), "{e}");
     }
 
     #[test]

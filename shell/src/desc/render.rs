@@ -85,6 +85,12 @@ pub enum Filter {
     Tent,
     /// A Gaussian of standard deviation 0.5 pixel, cut at 3σ (1.5 pixels).
     Gaussian,
+    /// Mitsuba 3's `gaussian` on its `hdrfilm`, exactly: σ = 0.5 pixel
+    /// reaching 2 pixels, less its value there (so it falls to 0), per
+    /// axis; and, as that film does without `sample_border`, it never looks
+    /// outside the image (a pixel at the border weighs the part of its
+    /// footprint inside). What `rtk import` translates Mitsuba's filter to.
+    MitsubaGaussian,
 }
 
 impl Filter {
@@ -94,6 +100,7 @@ impl Filter {
             Filter::Box => "box",
             Filter::Tent => "tent",
             Filter::Gaussian => "gaussian",
+            Filter::MitsubaGaussian => "mitsuba_gaussian",
         }
     }
 }
@@ -154,11 +161,12 @@ fn filter(r: &Node) -> Result<Option<Filter>, SceneError> {
         "box" => Ok(Some(Filter::Box)),
         "tent" => Ok(Some(Filter::Tent)),
         "gaussian" => Ok(Some(Filter::Gaussian)),
+        "mitsuba_gaussian" => Ok(Some(Filter::MitsubaGaussian)),
         other => Err(SceneError::invalid(
             &n.origin,
             OBJ,
             "filter",
-            format!("unknown pixel filter `{other}`: use \"box\", \"tent\" or \"gaussian\""),
+            format!("unknown pixel filter `{other}`: use \"box\", \"tent\", \"gaussian\" or \"mitsuba_gaussian\""),
         )),
     }
 }

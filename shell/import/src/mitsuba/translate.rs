@@ -18,6 +18,9 @@ use toml::Value as T;
 mod emitters;
 mod scene_objects;
 mod sensor;
+mod textures;
+
+pub(super) use textures::UvSource;
 
 /// The translation's state: the scene being built and what was dropped.
 pub(super) struct Tx<'a> {
@@ -25,11 +28,15 @@ pub(super) struct Tx<'a> {
     pub opts: &'a Options,
     pub out: RtkScene,
     pub warnings: Vec<String>,
-    /// BSDFs already translated (by object identity) and their shader.
-    pub shaders: Vec<(*const Obj, String)>,
+    /// BSDFs already translated (by object identity and the uv of the
+    /// shapes they are on, which their textures depend on) and their shader.
+    pub shaders: Vec<((*const Obj, Option<UvSource>), String)>,
     /// Scene parameters referenced as `$name` in the output, with their
     /// values as the translation typed them.
     pub used_params: Vec<(String, T)>,
+    /// How the shape being translated gives its uv (`None`: not as
+    /// Mitsuba does, so its textures are refused).
+    pub uv_source: Option<UvSource>,
 }
 
 impl Tx<'_> {
@@ -76,7 +83,14 @@ impl Tx<'_> {
                 ),
             ));
         }
-        Ok(relative_path(&p, &self.opts.out_dir).display().to_string())
+        let name = relative_path(&p, &self.opts.out_dir).display().to_string();
+        // rtk reads a string starting with `$` as a parameter reference;
+        // `$$` is its literal `$`.
+        Ok(if name.starts_with('$') {
+            format!("${name}")
+        } else {
+            name
+        })
     }
 }
 
@@ -219,14 +233,7 @@ impl<'o> Props<'o> {
                 ))?;
                 return Ok(None);
             }
-            Value::Object(o) => {
-                tx.refuse(ImportError::unsupported(
-                    &o.loc,
-                    format!("{} parameter `{name}`", self.obj.what()),
-                    format!("a texture ({}): not translated yet", o.what()),
-                ))?;
-                return Ok(None);
-            }
+            Value::Object(o) if o.tag == "texture" => return textures::texture(tx, o, name),
             _ => return Err(self.wrong(p, "a colour (<rgb>, <spectrum> or <float>)")),
         };
         Ok(Some(tx.param_or(p, v)))
@@ -322,6 +329,7 @@ pub fn scene(doc: &Document, path: &Path, opts: &Options) -> Result<Imported, Im
         warnings: Vec::new(),
         shaders: Vec::new(),
         used_params: Vec::new(),
+        uv_source: None,
     };
     let scene = &doc.scene;
     let (major, minor, patch) = doc.version;

@@ -5,7 +5,7 @@
 //! normal, unless wrapped in `twosided`. rtk's `lambert` says which with
 //! `two_sided`, so both translate exactly.
 
-use super::{def, steps, Props, Tx};
+use super::{def, steps, Props, Tx, UvSource};
 use crate::error::ImportError;
 use crate::mitsuba::transform::Transform;
 use crate::mitsuba::xml::{Obj, Value};
@@ -52,9 +52,8 @@ pub fn shape(tx: &mut Tx, s: &Rc<Obj>, children: &mut Vec<T>) -> Result<(), Impo
         "rtk does not flip a shape's normals",
     )?;
     p.finish(tx)?;
-    let Some(shader) = shape_shader(tx, s)? else {
-        return Ok(());
-    };
+    tx.uv_source = uv_source(s);
+    let shader = shape_shader(tx, s)?;
     let hint =
         s.id.clone()
             .unwrap_or_else(|| file_stem(s).unwrap_or_else(|| s.ty.clone()));
@@ -99,9 +98,29 @@ fn mesh(tx: &mut Tx, p: &mut Props) -> Result<Keys, ImportError> {
         "normals".into(),
         T::String(if face { "face" } else { "vertex" }.into()),
     ));
-    // Texture coordinates are not used by any translated material yet.
+    // Read by `uv_source`, for the textures.
     p.ignore(&["flip_tex_coords"]);
     Ok(k)
+}
+
+/// How shape `s` gives its uv against Mitsuba (textures on it are
+/// translated for that; `None`: refused).
+fn uv_source(s: &Obj) -> Option<UvSource> {
+    match s.ty.as_str() {
+        "obj" => {
+            let flip = !matches!(
+                s.prop("flip_tex_coords").map(|p| &p.value),
+                Some(Value::Bool(false))
+            );
+            Some(if flip {
+                UvSource::FlippedV
+            } else {
+                UvSource::Same
+            })
+        }
+        "ply" | "rectangle" => Some(UvSource::Same),
+        _ => None,
+    }
 }
 
 fn file_stem(s: &Obj) -> Option<String> {
@@ -114,9 +133,9 @@ fn file_stem(s: &Obj) -> Option<String> {
 }
 
 /// The shader of shape `s`: its BSDF's (Mitsuba's default, a one-sided
-/// `diffuse` of 0.5, when it has none), with the emission of its area
-/// emitter. `None` when lenient dropped it.
-fn shape_shader(tx: &mut Tx, s: &Obj) -> Result<Option<String>, ImportError> {
+/// `diffuse` of 0.5, when it has none or lenient dropped it), with the
+/// emission of its area emitter (none when lenient dropped it).
+fn shape_shader(tx: &mut Tx, s: &Obj) -> Result<String, ImportError> {
     let bsdfs: Vec<_> = s.children_tagged("bsdf").collect();
     let emitters: Vec<_> = s.children_tagged("emitter").collect();
     for c in s
@@ -129,28 +148,31 @@ fn shape_shader(tx: &mut Tx, s: &Obj) -> Result<Option<String>, ImportError> {
     if bsdfs.len() > 1 {
         return Err(ImportError::invalid(&bsdfs[1].loc, "a shape has one BSDF"));
     }
-    if emitters.len() > 1 || emitters.first().is_some_and(|e| e.ty != "area") {
-        let e = emitters
-            .iter()
-            .find(|e| e.ty != "area")
-            .unwrap_or(&emitters[0]);
-        tx.refuse_plugin(e, "a shape carries one area emitter")?;
-        return Ok(None);
+    let mut area = None;
+    for e in emitters {
+        if e.ty != "area" || area.is_some() {
+            tx.refuse_plugin(e, "a shape carries one area emitter")?;
+        } else if s.ty == "rectangle" {
+            tx.refuse_plugin(
+                e,
+                "rtk's polygon (a rectangle's translation) cannot sample its surface, so it cannot be an area light; give the rectangle as an OBJ or PLY mesh",
+            )?;
+        } else {
+            area = Some(e);
+        }
     }
-    let Some(e) = emitters.first() else {
+    let Some(e) = area else {
         return Ok(match bsdfs.first() {
             Some(b) => bsdf_shader(tx, b)?,
-            None => Some(default_diffuse(tx)),
+            None => default_diffuse(tx),
         });
     };
     // An emitter: its own shader, the BSDF's keys with the emission.
-    let mut keys = match bsdfs.first() {
-        Some(b) => match bsdf_keys(tx, b)? {
-            Some(k) => k,
-            None => return Ok(None),
-        },
-        None => diffuse_keys(vec3([0.5; 3]), false),
+    let keys = match bsdfs.first() {
+        Some(b) => bsdf_keys(tx, b)?,
+        None => None,
     };
+    let mut keys = keys.unwrap_or_else(|| diffuse_keys(vec3([0.5; 3]), false));
     let mut p = Props::new(e);
     let radiance = p.color(tx, "radiance")?.unwrap_or(vec3([1.0; 3]));
     p.finish(tx)?;
@@ -159,7 +181,7 @@ fn shape_shader(tx: &mut Tx, s: &Obj) -> Result<Option<String>, ImportError> {
         .out
         .fresh_name(&format!("{}_emitter", s.id.as_deref().unwrap_or("area")));
     tx.out.shaders.push((name.clone(), keys));
-    Ok(Some(name))
+    Ok(name)
 }
 
 fn diffuse_keys(albedo: T, two_sided: bool) -> Keys {
@@ -182,19 +204,24 @@ fn default_diffuse(tx: &mut Tx) -> String {
     name.into()
 }
 
-/// The shader of BSDF `b`, translated once however many shapes use it.
-fn bsdf_shader(tx: &mut Tx, b: &Rc<Obj>) -> Result<Option<String>, ImportError> {
+/// The shader of BSDF `b`, translated (or, lenient, dropped for the
+/// default) once however many shapes use it.
+fn bsdf_shader(tx: &mut Tx, b: &Rc<Obj>) -> Result<String, ImportError> {
     let key = Rc::as_ptr(b);
+    let key = (key, tx.uv_source);
     if let Some((_, n)) = tx.shaders.iter().find(|(p, _)| *p == key) {
-        return Ok(Some(n.clone()));
+        return Ok(n.clone());
     }
-    let Some(keys) = bsdf_keys(tx, b)? else {
-        return Ok(None);
+    let name = match bsdf_keys(tx, b)? {
+        Some(keys) => {
+            let name = tx.out.fresh_name(b.id.as_deref().unwrap_or(&b.ty));
+            tx.out.shaders.push((name.clone(), keys));
+            name
+        }
+        None => default_diffuse(tx),
     };
-    let name = tx.out.fresh_name(b.id.as_deref().unwrap_or(&b.ty));
-    tx.out.shaders.push((name.clone(), keys));
     tx.shaders.push((key, name.clone()));
-    Ok(Some(name))
+    Ok(name)
 }
 
 /// A BSDF's shader keys; `None` when lenient dropped it.

@@ -72,25 +72,16 @@ fn one_integrator(tx: &mut Tx, i: &Obj) -> Result<Keys, ImportError> {
             p.only_default(tx, "hide_emitters", &Value::Bool(false), refuse_hidden)?;
             path_keys(Some(2), 5)
         }
-        "path" => {
-            let max_depth = p.int("max_depth", -1)?;
-            let rr_depth = p.int("rr_depth", 5)?;
-            if max_depth == 0 || max_depth < -1 || rr_depth < 1 {
-                return Err(ImportError::unsupported(
-                    &i.loc,
-                    i.what(),
-                    format!("max_depth = {max_depth}, rr_depth = {rr_depth}: rtk's path needs max_depth ≥ 1 (or -1, unlimited) and rr_depth ≥ 1"),
-                ));
-            }
-            p.only_default(tx, "hide_emitters", &Value::Bool(false), refuse_hidden)?;
-            path_keys((max_depth > 0).then_some(max_depth), rr_depth)
-        }
+        "path" => path_like(tx, &mut p, refuse_hidden)?,
         "volpath" | "volpathmis" => {
-            return Err(ImportError::unsupported(
+            // Without media these render as path does; with them, the
+            // media themselves are refused where they are declared.
+            tx.refuse(ImportError::unsupported(
                 &i.loc,
                 i.what(),
-                "participating media are refused: rtk's importer does not translate media (docs/import.md)",
-            ))
+                "participating media are refused: rtk's importer does not translate media (docs/import.md); lenient, it is translated as path",
+            ))?;
+            path_like(tx, &mut p, refuse_hidden)?
         }
         _ => {
             return Err(ImportError::unsupported(
@@ -102,6 +93,22 @@ fn one_integrator(tx: &mut Tx, i: &Obj) -> Result<Keys, ImportError> {
     };
     p.finish(tx)?;
     Ok(keys)
+}
+
+/// `path`'s keys from a path-like integrator's `max_depth`, `rr_depth`
+/// and `hide_emitters`.
+fn path_like(tx: &mut Tx, p: &mut Props, refuse_hidden: &str) -> Result<Keys, ImportError> {
+    let max_depth = p.int("max_depth", -1)?;
+    let rr_depth = p.int("rr_depth", 5)?;
+    if max_depth == 0 || max_depth < -1 || rr_depth < 1 {
+        return Err(ImportError::unsupported(
+            &p.obj.loc,
+            p.obj.what(),
+            format!("max_depth = {max_depth}, rr_depth = {rr_depth}: rtk's path needs max_depth ≥ 1 (or -1, unlimited) and rr_depth ≥ 1"),
+        ));
+    }
+    p.only_default(tx, "hide_emitters", &Value::Bool(false), refuse_hidden)?;
+    Ok(path_keys((max_depth > 0).then_some(max_depth), rr_depth))
 }
 
 /// The first `<sensor>` → `[cameras.*]` and the film's `[render]` keys.
@@ -145,10 +152,16 @@ pub fn sensor(tx: &mut Tx, scene: &Obj) -> Result<(), ImportError> {
     let mut cam = def("pinhole");
     let t = p.transform("to_world")?;
     let (eye, look_at, up) = match t {
-        None => ([0.0; 3], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
-        Some(t) => camera_frame(t).map_err(|m| {
-            ImportError::unsupported(&s.loc, format!("{} parameter `to_world`", s.what()), m)
-        })?,
+        None => MITSUBA_POSE,
+        Some(t) => match camera_frame(t) {
+            Ok(pose) => pose,
+            Err(m) => {
+                let what = format!("{} parameter `to_world`", s.what());
+                let at = s.prop("to_world").map_or(&s.loc, |q| &q.loc);
+                tx.refuse(ImportError::unsupported(at, what, m))?;
+                MITSUBA_POSE
+            }
+        },
     };
     cam.push(("eye".into(), vec3(eye)));
     cam.push(("look_at".into(), vec3(look_at)));
@@ -227,6 +240,10 @@ fn fov(p: &mut Props, aspect: f64, s: &Obj) -> Result<f64, ImportError> {
 /// A pinhole's eye, look-at point and up.
 type Pose = ([f64; 3], [f64; 3], [f64; 3]);
 
+/// A Mitsuba camera's pose without `to_world`: at the origin, looking
+/// along +z, +y up.
+const MITSUBA_POSE: Pose = ([0.0; 3], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]);
+
 /// Eye, look-at point and up of a camera-to-world transform: Mitsuba's
 /// camera looks along +z with +y up and +x to the left, so a rigid
 /// transform (any translation and rotation, a uniform scale) is a pinhole
@@ -266,7 +283,8 @@ fn camera_frame(t: &crate::mitsuba::transform::Transform) -> Result<Pose, String
 fn film(tx: &mut Tx, s: &Obj) -> Result<(u32, u32), ImportError> {
     let films: Vec<_> = s.children_tagged("film").collect();
     let (mut w, mut h) = (768, 576);
-    let mut filter = "gaussian".to_string();
+    // hdrfilm's default filter.
+    let mut filter = "mitsuba_gaussian".to_string();
     if let Some(f) = films.first() {
         if f.ty != "hdrfilm" {
             tx.refuse_plugin(f, "rtk translates the hdrfilm film")?;
@@ -301,48 +319,55 @@ fn film(tx: &mut Tx, s: &Obj) -> Result<(u32, u32), ImportError> {
             format!("a film of {w}x{h} pixels: rtk renders 1 to 65536 a side"),
         ));
     }
-    if filter == "gaussian" {
-        tx.refuse(ImportError::unsupported(
-            &films.first().map_or(s.loc.clone(), |f| f.loc.clone()),
-            "<rfilter type=\"gaussian\"> (hdrfilm's default)",
-            "Mitsuba's gaussian (σ = 0.5 px) reaches 2 px; rtk's is cut at 1.5 px, which changes the expected image",
-        ))?;
-    } else {
-        tx.out.render.push(("filter".into(), T::String(filter)));
-    }
+    tx.out.render.push(("filter".into(), T::String(filter)));
     tx.out.render.insert(0, ("height".into(), T::Integer(h)));
     tx.out.render.insert(0, ("width".into(), T::Integer(w)));
     Ok((w as u32, h as u32))
 }
 
-/// `<rfilter>`: box, and the tent of radius 1 (rtk's).
+/// `<rfilter>`: box, and Mitsuba's gaussian (rtk's `mitsuba_gaussian`).
 fn rfilter(tx: &mut Tx, r: &Obj) -> Result<String, ImportError> {
     let mut p = Props::new(r);
     let name = match r.ty.as_str() {
         "box" => "box",
         "tent" => {
-            p.only_default(
-                tx,
-                "radius",
-                &Value::Float(1.0),
-                "rtk's tent has a radius of 1 pixel",
-            )?;
-            "tent"
+            return Err(ImportError::unsupported(
+                &r.loc,
+                r.what(),
+                "rtk's tent looks past the image's border, Mitsuba's film without sample_border does not: border pixels differ",
+            ))
         }
         "gaussian" => {
-            p.ignore(&["stddev"]);
-            "gaussian"
+            p.only_default(
+                tx,
+                "stddev",
+                &Value::Float(0.5),
+                "rtk has Mitsuba's gaussian of σ = 0.5 pixel (`mitsuba_gaussian`)",
+            )?;
+            "mitsuba_gaussian"
         }
         _ => {
             return Err(ImportError::unsupported(
                 &r.loc,
                 r.what(),
-                "rtk has the box and tent filters (and a gaussian of another footprint)",
+                "rtk translates Mitsuba's box and gaussian filters",
             ))
         }
     };
     p.finish(tx)?;
     Ok(name.to_string())
+}
+
+/// The least square ≥ `n` (Mitsuba's stratified sample count).
+fn square_up(n: i64) -> i64 {
+    let mut r = (n as f64).sqrt() as i64;
+    while r * r < n {
+        r += 1;
+    }
+    while r > 1 && (r - 1) * (r - 1) >= n {
+        r -= 1;
+    }
+    r * r
 }
 
 /// `<sampler>` → `[render]` spp, sampler, seed. Every unbiased sampler
@@ -373,18 +398,7 @@ fn sampler(tx: &mut Tx, s: &Obj) -> Result<(), ImportError> {
             ))
         }
     };
-    let spp = match p.get("sample_count") {
-        None => T::Integer(4),
-        Some(prop) => match prop.value {
-            Value::Int(n) if n >= 1 => tx.param_or(prop, T::Integer(n)),
-            _ => {
-                return Err(ImportError::invalid(
-                    &prop.loc,
-                    "sample_count must be a positive <integer>",
-                ))
-            }
-        },
-    };
+    let spp = sample_count(tx, &mut p, kind)?;
     tx.out.render.push(("spp".into(), spp));
     tx.out
         .render
@@ -401,4 +415,36 @@ fn sampler(tx: &mut Tx, s: &Obj) -> Result<(), ImportError> {
         }
     }
     p.finish(tx)
+}
+
+/// `sample_count` (Mitsuba's default 4), as `[render] spp`.
+fn sample_count(tx: &mut Tx, p: &mut Props, kind: &str) -> Result<T, ImportError> {
+    Ok(match p.get("sample_count") {
+        None => T::Integer(4),
+        Some(prop) => match prop.value {
+            Value::Int(n) if !(1..=u32::MAX as i64).contains(&n) => {
+                return Err(ImportError::invalid(
+                    &prop.loc,
+                    "sample_count must be a positive <integer> (Mitsuba's is 32 bits)",
+                ))
+            }
+            Value::Int(n) if kind == "stratified" && square_up(n) != n => {
+                // Mitsuba's stratified sampler takes the next square.
+                let m = square_up(n);
+                tx.warnings.push(format!(
+                    "note: {}: {}: sample_count = {n} is not a square: Mitsuba's stratified sampler takes {m} samples a pixel, and so does the translation",
+                    prop.loc,
+                    p.obj.what()
+                ));
+                T::Integer(m)
+            }
+            Value::Int(n) => tx.param_or(prop, T::Integer(n)),
+            _ => {
+                return Err(ImportError::invalid(
+                    &prop.loc,
+                    "sample_count must be a positive <integer>",
+                ))
+            }
+        },
+    })
 }
