@@ -232,6 +232,27 @@ fn loc_at(f: &FileDoc, pos: usize) -> Loc {
     }
 }
 
+/// roxmltree's error `e` in `f`, located.
+fn syntax_error(f: &FileDoc, e: roxmltree::Error) -> ImportError {
+    let p = e.pos();
+    let at = Loc {
+        file: f.path.clone(),
+        line: p.row,
+        col: p.col,
+    };
+    match e {
+        // roxmltree says where the document starts.
+        roxmltree::Error::DtdDetected => ImportError::Syntax {
+            loc: f.text.find("<!DOCTYPE").map_or(at, |i| loc_at(f, i)),
+            message: "a <!DOCTYPE> (DTD): rtk reads no DTD and expands no entities (Mitsuba scenes have none)".into(),
+        },
+        e => ImportError::Syntax {
+            loc: at,
+            message: e.to_string(),
+        },
+    }
+}
+
 /// A version attribute `a.b.c` as numbers.
 fn parse_version(s: &str) -> Option<(u32, u32, u32)> {
     let mut it = s.trim().split('.').map(|p| p.parse::<u32>());
@@ -261,17 +282,8 @@ impl Parser {
             ..Default::default()
         };
         let version = {
-            let doc = roxmltree::Document::parse_with_options(&f.text, opts).map_err(|e| {
-                let p = e.pos();
-                ImportError::Syntax {
-                    loc: Loc {
-                        file: f.path.clone(),
-                        line: p.row,
-                        col: p.col,
-                    },
-                    message: e.to_string(),
-                }
-            })?;
+            let doc = roxmltree::Document::parse_with_options(&f.text, opts)
+                .map_err(|e| syntax_error(&f, e))?;
             let root = doc.root_element();
             let loc = loc_at(&f, root.range().start);
             if root.tag_name().name() != "scene" {
