@@ -10,6 +10,7 @@ mod farm;
 mod fuzz;
 mod hostile;
 mod hygiene;
+mod import_hostile;
 mod interior;
 mod loading;
 mod long_renders;
