@@ -74,6 +74,22 @@ fn npy_image(bytes: &[u8]) -> Result<(), String> {
         .map_err(|e| format!("{e:#}"))
 }
 
+/// A Mitsuba scene (`rtk import`): the bytes as a file of its own
+/// folder, imported as `rtk import` does (its includes and meshes, named
+/// relative to it, are mostly absent: a refusal like any other).
+fn mitsuba_xml(bytes: &[u8]) -> Result<(), String> {
+    let dir = tempfile::tempdir().map_err(|e| format!("a temporary folder: {e}"))?;
+    let path = dir.path().join("fuzz.xml");
+    std::fs::write(&path, bytes).map_err(|e| format!("writing {}: {e}", path.display()))?;
+    let opts = rtk_import::Options {
+        out_dir: dir.path().to_path_buf(),
+        ..Default::default()
+    };
+    rtk_import::import(&path, &opts)
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
 /// Every target.
 pub const TARGETS: &[Target] = &[
     Target {
@@ -99,6 +115,10 @@ pub const TARGETS: &[Target] = &[
     Target {
         name: "npy-image",
         read: npy_image,
+    },
+    Target {
+        name: "mitsuba-xml",
+        read: mitsuba_xml,
     },
 ];
 

@@ -57,6 +57,19 @@ fn seeds(name: &str) -> Vec<Vec<u8>> {
         "film-file" => vec![film_seed(3, 2), film_seed(1, 1)],
         "pfm-image" => vec![image_seeds().0],
         "npy-image" => vec![image_seeds().1],
+        // Golden translations that need no other file (an include or a
+        // mesh would be absent beside the fuzzer's file).
+        "mitsuba-xml" => vec![
+            include_str!("../../shell/import/tests/golden/default_param.xml"),
+            include_str!("../../shell/import/tests/golden/emitter_point_to_world.xml"),
+            include_str!("../../shell/import/tests/golden/integrator_moment.xml"),
+            include_str!("../../shell/import/tests/golden/sensor_rigid.xml"),
+            include_str!("../../shell/import/tests/golden/ref.xml"),
+            include_str!("../../shell/import/tests/golden/alias.xml"),
+        ]
+        .into_iter()
+        .map(|s: &str| s.as_bytes().to_vec())
+        .collect(),
         other => panic!("no seeds for {other}"),
     }
 }
