@@ -390,6 +390,11 @@ fn conform_passes_every_built_in_camera_light_and_integrator() {
             &["pass  delta-light", "pass  points-on-light"],
         ),
         (
+            "projector",
+            &[],
+            &["pass  delta-light", "pass  points-on-light"],
+        ),
+        (
             "constant",
             &[],
             &[

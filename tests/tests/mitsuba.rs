@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 /// unlisted).
 const PASSING: &[&str] = &[
     "floating_sphere/test_directional_direct",
+    "projector/test_projector_constant_direct",
+    "projector/test_projector_textured_direct",
     "texture_interp/test_texture_interp_direct",
 ];
 
@@ -153,6 +155,14 @@ fn a_two_percent_brighter_light_fails_the_z_test_in_every_passing_scene() {
         (
             "floating_sphere/test_directional_direct",
             "lights.directional.irradiance=[1.02, 1.02, 1.02]",
+        ),
+        (
+            "projector/test_projector_constant_direct",
+            "lights.projector.scale=1.02",
+        ),
+        (
+            "projector/test_projector_textured_direct",
+            "lights.projector.scale=1.02",
         ),
         (
             "texture_interp/test_texture_interp_direct",

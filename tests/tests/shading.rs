@@ -262,3 +262,97 @@ fn transform_class_refuses_translations_beyond_the_limit() {
         run.stderr
     );
 }
+
+/// The `projector` light against its closed form: on a white lambert plane
+/// at unit distance along its axis, Mitsuba's normalisation (irradiance ·
+/// π · scale / (z² cos θ)) makes the reflected radiance irradiance · scale
+/// everywhere inside the projected frame (the cosines and distances cancel
+/// at z = 1), and nothing outside it.
+#[test]
+fn a_projector_lights_a_plane_at_unit_distance_evenly() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("p.toml");
+    std::fs::write(
+        &scene,
+        r#"
+[render]
+width = 16
+height = 16
+spp = 4
+filter = "box"
+camera = "c"
+root = "floor"
+integrator = { class = "path", max_depth = 2 }
+
+[cameras.c]
+class = "pinhole"
+eye = [0.0, 0.0, 0.0]
+look_at = [0.0, 0.0, -1.0]
+fov_y = 60.0
+
+[lights.slide]
+class = "projector"
+# +z of its frame along world -z (a rotation of 180° about y).
+to_world = [-1.0, 0.0, 0.0, 0.0,  0.0, 1.0, 0.0, 0.0,  0.0, 0.0, -1.0, 0.0,  0.0, 0.0, 0.0, 1.0]
+fov = 90.0
+irradiance = [0.5, 0.25, 1.0]
+scale = 0.8
+
+[shaders.white]
+class = "lambert"
+albedo = [1.0, 1.0, 1.0]
+
+[objects.floor]
+class = "polygon"
+points = [[-10.0, -10.0, -1.0], [10.0, -10.0, -1.0], [10.0, 10.0, -1.0], [-10.0, 10.0, -1.0]]
+
+[objects.floor_lit]
+class = "list"
+children = [{ object = "floor", shader = "white" }]
+"#,
+    )
+    .unwrap();
+    let out = dir.path().join("p.exr");
+    let r = Run::from(
+        rtk(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+            "--set",
+            "render.root=floor_lit",
+        ])
+        .output()
+        .unwrap(),
+    );
+    assert!(r.ok, "{}", r.stderr);
+    let img = Image::read(&out);
+    // The camera's 60° frame lies inside the projector's 90°: every pixel lit.
+    for (i, px) in img.data.chunks(3).enumerate() {
+        for (c, want) in px.iter().zip([0.4f32, 0.2, 0.8]) {
+            assert!((c - want).abs() < 1e-4, "pixel {i}: {px:?}");
+        }
+    }
+    // A 30° projector leaves the frame's corners dark.
+    let r = Run::from(
+        rtk(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+            "--set",
+            "render.root=floor_lit",
+            "--set",
+            "lights.slide.fov=30.0",
+        ])
+        .output()
+        .unwrap(),
+    );
+    assert!(r.ok, "{}", r.stderr);
+    let img = Image::read(&out);
+    assert_eq!(img.data[0], 0.0, "a corner outside the projection");
+    let centre = (8 * 16 + 8) * 3;
+    assert!((img.data[centre] - 0.4).abs() < 1e-4);
+}

@@ -241,6 +241,15 @@ impl Texture {
         }
     }
 
+    /// An image texture's width and height in texels (`None` for the
+    /// others): what a projection that keeps the image's aspect needs.
+    pub fn size(&self) -> Option<(u32, u32)> {
+        match &self.kind {
+            Kind::Image { img, .. } => Some((img.width, img.height)),
+            _ => None,
+        }
+    }
+
     /// The colour when it is the same everywhere.
     pub fn as_constant(&self) -> Option<Color> {
         match self.kind {

@@ -44,6 +44,7 @@ pub fn light(tx: &mut Tx, e: &Obj) -> Result<(), ImportError> {
             k.push(("radiance".into(), r));
             k
         }
+        "projector" => projector(tx, &mut p)?,
         "area" => {
             return Err(ImportError::invalid(
                 &e.loc,
@@ -53,7 +54,7 @@ pub fn light(tx: &mut Tx, e: &Obj) -> Result<(), ImportError> {
         _ => {
             return tx.refuse_plugin(
                 e,
-                "rtk translates the emitters directional, point, constant and area",
+                "rtk translates the emitters directional, point, constant, projector and area",
             )
         }
     };
@@ -61,4 +62,35 @@ pub fn light(tx: &mut Tx, e: &Obj) -> Result<(), ImportError> {
     let name = tx.out.fresh_name(e.id.as_deref().unwrap_or(&e.ty));
     tx.out.lights.push((name, keys));
     Ok(())
+}
+
+/// `projector` → rtk's `projector`, which reproduces Mitsuba's projection
+/// and normalisation; its texture is looked up at Mitsuba's own uv.
+fn projector(tx: &mut Tx, p: &mut Props) -> Result<crate::rtk_scene::Keys, ImportError> {
+    let mut k = def("projector");
+    let m = match p.transform("to_world")? {
+        Some(t) => t.m,
+        None => super::super::transform::Transform::identity().m,
+    };
+    let flat: Vec<toml::Value> = m.iter().flatten().map(|x| toml::Value::Float(*x)).collect();
+    k.push(("to_world".into(), toml::Value::Array(flat)));
+    if p.obj.prop("focal_length").is_some() {
+        return Err(ImportError::unsupported(
+            &p.obj.loc,
+            format!("{} parameter `focal_length`", p.obj.what()),
+            "rtk's projector takes `fov` (or Mitsuba's default 50mm, when neither is given)",
+        ));
+    }
+    if p.obj.prop("fov").is_some() {
+        k.push(("fov".into(), toml::Value::Float(p.float("fov", 0.0)?)));
+        k.push((
+            "fov_axis".into(),
+            toml::Value::String(p.string("fov_axis", "x")?),
+        ));
+    }
+    tx.uv_source = Some(super::UvSource::Same);
+    let irr = p.color(tx, "irradiance")?.unwrap_or(vec3([1.0; 3]));
+    k.push(("irradiance".into(), irr));
+    k.push(("scale".into(), toml::Value::Float(p.float("scale", 1.0)?)));
+    Ok(k)
 }
