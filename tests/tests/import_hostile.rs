@@ -5,13 +5,10 @@
 //! there is one) which line and column, with a clear message, and write
 //! nothing (the folder holds exactly the case's own files afterwards).
 //!
-//! Not here: a texture whose header declares 100,000 x 100,000 pixels.
-//! When these cases were written the importer refused every texture
-//! before any image was opened, so it was unreachable; bitmap textures
-//! are now translated (by file name: the image is read by the renderer,
-//! whose own limits refuse it), and that case belongs to the next
-//! revision of this file. A 100 MB attribute is not needed: a scene file
-//! is refused above 64 MiB by its size, before it is read.
+//! A texture whose header declares 100,000 x 100,000 pixels is refused at
+//! import, at its `filename`, from the header alone. A 100 MB attribute is
+//! not needed: a scene file is refused above 64 MiB by its size, before it
+//! is read.
 
 use rtk_tests::*;
 use std::path::Path;
@@ -61,6 +58,35 @@ impl Case {
         self.files.push((name.into(), text.into()));
         self
     }
+}
+
+/// An 8-bit RGB PNG of `w` x `h` pixels with an empty image-data chunk:
+/// a well-formed header that promises a huge image.
+fn png_header(w: u32, h: u32) -> Vec<u8> {
+    let mut ihdr = w.to_be_bytes().to_vec();
+    ihdr.extend(h.to_be_bytes());
+    ihdr.extend([8, 2, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    for (kind, data) in [(b"IHDR", ihdr), (b"IDAT", vec![]), (b"IEND", vec![])] {
+        let mut chunk = kind.to_vec();
+        chunk.extend(&data);
+        // CRC-32 (ISO 3309) of the chunk type and data, as PNG requires.
+        let mut crc = !0u32;
+        for &b in &chunk {
+            crc ^= b as u32;
+            for _ in 0..8 {
+                crc = if crc & 1 != 0 {
+                    (crc >> 1) ^ 0xEDB8_8320
+                } else {
+                    crc >> 1
+                };
+            }
+        }
+        png.extend((data.len() as u32).to_be_bytes());
+        png.extend(&chunk);
+        png.extend((!crc).to_be_bytes());
+    }
+    png
 }
 
 /// `depth` files `inc0.xml` ... each including the next, the last a shape.
@@ -136,6 +162,12 @@ fn cases() -> Vec<Case> {
             scene("    <shape type=\"obj\">\n        <string name=\"filename\" value=\"missing.obj\"/>\n    </shape>"),
             &["X.xml:13:9: ", "`missing.obj` does not exist"],
         ),
+        case(
+            "a texture whose header declares 100,000 x 100,000 texels",
+            scene("    <shape type=\"rectangle\">\n        <bsdf type=\"diffuse\">\n            <texture type=\"bitmap\" name=\"reflectance\">\n                <string name=\"filename\" value=\"huge.png\"/>\n            </texture>\n        </bsdf>\n    </shape>"),
+            &["X.xml:15:17: ", "huge.png declares 100000 x 100000 texels"],
+        )
+        .with("huge.png", png_header(100_000, 100_000)),
         case(
             "an include cycle",
             scene("    <include filename=\"b.xml\"/>"),

@@ -103,6 +103,18 @@ fn mesh(tx: &mut Tx, p: &mut Props) -> Result<Keys, ImportError> {
     Ok(k)
 }
 
+/// Does object `o`, or one nested in it, hold a texture?
+fn has_texture(o: &Obj) -> bool {
+    let nested = o.props.iter().filter_map(|p| match &p.value {
+        Value::Object(c) => Some(c.as_ref()),
+        _ => None,
+    });
+    o.tag == "texture"
+        || nested
+            .chain(o.children.iter().map(|c| c.as_ref()))
+            .any(has_texture)
+}
+
 /// How shape `s` gives its uv against Mitsuba (textures on it are
 /// translated for that; `None`: refused).
 fn uv_source(s: &Obj) -> Option<UvSource> {
@@ -207,8 +219,10 @@ fn default_diffuse(tx: &mut Tx) -> String {
 /// The shader of BSDF `b`, translated (or, lenient, dropped for the
 /// default) once however many shapes use it.
 fn bsdf_shader(tx: &mut Tx, b: &Rc<Obj>) -> Result<String, ImportError> {
-    let key = Rc::as_ptr(b);
-    let key = (key, tx.uv_source);
+    // A BSDF's translation depends on its shape's uv only through a
+    // texture: without one, every shape shares one shader.
+    let uv = if has_texture(b) { tx.uv_source } else { None };
+    let key = (Rc::as_ptr(b), uv);
     if let Some((_, n)) = tx.shaders.iter().find(|(p, _)| *p == key) {
         return Ok(n.clone());
     }

@@ -47,6 +47,7 @@ pub fn texture(tx: &mut Tx, o: &Obj, key: &str) -> Result<Option<T>, ImportError
         return Err(ImportError::invalid(&f.loc, "`filename` is a <string>"));
     };
     let file = tx.file(&f.loc, name)?;
+    check_size(&tx.doc.resolve(&f.loc, name), &f.loc)?;
     let lower = name.to_ascii_lowercase();
     let float = lower.ends_with(".exr") || lower.ends_with(".hdr") || lower.ends_with(".pfm");
     if !float {
@@ -101,4 +102,34 @@ pub fn texture(tx: &mut Tx, o: &Obj, key: &str) -> Result<Option<T>, ImportError
     k.push(("filter".into(), T::String(filter)));
     k.push(("v_origin".into(), T::String("top".into())));
     Ok(Some(inline_table(k)))
+}
+
+/// Refuse at the scene's own element an image the renderer would refuse
+/// (its header read, nothing decoded): unreadable, or beyond the sdk's
+/// limits of texels a side and in all.
+fn check_size(path: &std::path::Path, loc: &crate::error::Loc) -> Result<(), ImportError> {
+    use rtk_sdk::texture::{MAX_SIDE, MAX_TEXELS};
+    let dims = image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| e.to_string())
+        .and_then(|r| r.into_dimensions().map_err(|e| e.to_string()));
+    let (w, h) = dims.map_err(|e| {
+        ImportError::invalid(
+            loc,
+            format!(
+                "the texture {}: not an image rtk reads (PNG, JPEG, EXR): {e}",
+                path.display()
+            ),
+        )
+    })?;
+    if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE || w as u64 * h as u64 > MAX_TEXELS {
+        return Err(ImportError::invalid(
+            loc,
+            format!(
+                "the texture {} declares {w} x {h} texels: rtk's textures are 1 to {MAX_SIDE} a side and at most 2^26 in all",
+                path.display()
+            ),
+        ));
+    }
+    Ok(())
 }
