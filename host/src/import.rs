@@ -50,7 +50,7 @@ impl ImportOptions {
 /// The arguments of `rtk import`.
 #[derive(clap::Args)]
 pub struct ImportArgs {
-    /// The scene: Mitsuba XML (.xml).
+    /// The scene: Mitsuba XML (.xml) or pbrt-v4 (.pbrt).
     scene: PathBuf,
     /// Where to write the rtk scene (.toml); default: standard output.
     /// File names in it are relative to its folder.

@@ -187,9 +187,9 @@ fn a_two_percent_brighter_light_fails_the_z_test_in_every_passing_scene() {
     }
 }
 
-/// `scenes/cornell.xml` is `scenes/cornell.toml` as a Mitsuba 3 scene: its
-/// import renders what the TOML renders (Welch's test, both noisy), and a
-/// camera 2° wider does not.
+/// `scenes/cornell.xml` and `scenes/cornell.pbrt` are `scenes/cornell.toml`
+/// as a Mitsuba 3 and a pbrt-v4 scene: their imports render what the TOML
+/// renders (Welch's test, both noisy), and a camera 2° wider does not.
 #[test]
 fn the_cornell_box_as_mitsuba_xml_renders_as_the_toml_scene() {
     let dir = tempfile::tempdir().unwrap();
@@ -224,6 +224,7 @@ fn the_cornell_box_as_mitsuba_xml_renders_as_the_toml_scene() {
     };
     render("scenes/cornell.toml", "toml", "1", &[]);
     render("scenes/cornell.xml", "xml", "2", &[]);
+    render("scenes/cornell.pbrt", "pbrt", "3", &[]);
     render(
         "scenes/cornell.xml",
         "wide",
@@ -246,13 +247,11 @@ fn the_cornell_box_as_mitsuba_xml_renders_as_the_toml_scene() {
         ];
         Run::from(rtk(&args).output().unwrap())
     };
-    let same = welch("xml");
-    assert!(
-        same.ok && same.stdout.contains("\npass\n"),
-        "{}{}",
-        same.stdout,
-        same.stderr
-    );
+    for b in ["xml", "pbrt"] {
+        let same = welch(b);
+        let pass = same.ok && same.stdout.contains("\npass\n");
+        assert!(pass, "{b}: {}{}", same.stdout, same.stderr);
+    }
     let wide = welch("wide");
     assert!(
         !wide.ok && wide.stdout.contains("\nFAIL\n"),

@@ -22,8 +22,8 @@ use tracer::Tracer;
 /// The arguments of `rtk render`.
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// The scene file: rtk's TOML, or Mitsuba XML (.xml), translated as
-    /// `rtk import` does.
+    /// The scene file: rtk's TOML, or Mitsuba XML (.xml) or pbrt-v4
+    /// (.pbrt), translated as `rtk import` does.
     scene: PathBuf,
     #[command(flatten)]
     import: crate::import::ImportOptions,

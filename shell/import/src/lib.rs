@@ -15,12 +15,14 @@
 //! translated exactly or refused.
 //!
 //! - [`mitsuba`]: Mitsuba XML, versions 0.5, 2.x and 3.x;
+//! - [`pbrt`]: pbrt-v4's scene format (a first subset);
 //! - [`rtk_scene`]: the scene the translators build and its TOML text.
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod error;
 pub mod mitsuba;
+pub mod pbrt;
 pub mod rtk_scene;
 
 pub use error::{ImportError, Loc};
@@ -49,21 +51,27 @@ pub struct Imported {
     pub warnings: Vec<String>,
 }
 
+fn extension(path: &Path) -> String {
+    (path.extension().and_then(|e| e.to_str()))
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
 /// The formats an importer exists for, by file extension.
 pub fn is_importable(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+    matches!(extension(path).as_str(), "xml" | "pbrt")
 }
 
 /// Import `path` by its extension.
 pub fn import(path: &Path, opts: &Options) -> Result<Imported, ImportError> {
-    if is_importable(path) {
-        mitsuba::import(path, opts)
-    } else {
-        Err(ImportError::Read {
+    match extension(path).as_str() {
+        "xml" => mitsuba::import(path, opts),
+        "pbrt" => pbrt::import(path, opts),
+        _ => Err(ImportError::Read {
             path: path.to_path_buf(),
-            message: "not a scene rtk can import: Mitsuba scenes end in .xml".into(),
-        })
+            message:
+                "not a scene rtk can import: Mitsuba scenes end in .xml, pbrt-v4 scenes in .pbrt"
+                    .into(),
+        }),
     }
 }

@@ -3,6 +3,7 @@
 //! instances one per line, so that the file reads like one written by hand.
 
 use std::fmt::Write;
+use std::path::{Path, PathBuf};
 use toml::Value;
 
 /// A table's keys and values, in the order they are written.
@@ -142,6 +143,39 @@ fn float(f: f64) -> String {
     } else {
         format!("{s}.0")
     }
+}
+
+/// A file's name as a scene read from folder `out_dir` names it: relative
+/// to that folder where both resolve, else absolute; a leading `$`
+/// doubled (rtk reads `"$name"` as a scene parameter, `"$$"` as `$`).
+pub fn file_name(path: &Path, out_dir: &Path) -> String {
+    let name = relative_path(path, out_dir).display().to_string();
+    if name.starts_with('$') {
+        format!("${name}")
+    } else {
+        name
+    }
+}
+
+/// `target` relative to folder `base` when both canonicalize, else
+/// `target` made absolute.
+fn relative_path(target: &Path, base: &Path) -> PathBuf {
+    let (Ok(t), Ok(b)) = (std::fs::canonicalize(target), std::fs::canonicalize(base)) else {
+        return std::path::absolute(target).unwrap_or_else(|_| target.to_path_buf());
+    };
+    let (tc, bc): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
+    let common = tc.iter().zip(&bc).take_while(|(a, b)| a == b).count();
+    if common == 0 {
+        return t;
+    }
+    let mut out = PathBuf::new();
+    for _ in common..bc.len() {
+        out.push("..");
+    }
+    for c in &tc[common..] {
+        out.push(c.as_os_str());
+    }
+    out
 }
 
 /// An `[x, y, z]` float array.

@@ -1,6 +1,6 @@
 //! Each Mitsuba plugin mapped to rtk's (docs/import.md has the table).
 //!
-//! Every object is read through [`Props`], which marks the properties the
+//! Every object is read through `Props`, which marks the properties the
 //! translation used: whatever is left is refused by name at the end, so a
 //! parameter this code does not know can never be dropped silently. A
 //! parameter that only restates rtk's behaviour (Mitsuba's default) is
@@ -11,7 +11,7 @@ use super::xml::{Document, Obj, Prop, Value};
 use crate::error::{ImportError, Loc};
 use crate::rtk_scene::{inline_table, vec3, Keys, RtkScene};
 use crate::{Imported, Options};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::rc::Rc;
 use toml::Value as T;
 
@@ -83,36 +83,8 @@ impl Tx<'_> {
                 ),
             ));
         }
-        let name = relative_path(&p, &self.opts.out_dir).display().to_string();
-        // rtk reads a string starting with `$` as a parameter reference;
-        // `$$` is its literal `$`.
-        Ok(if name.starts_with('$') {
-            format!("${name}")
-        } else {
-            name
-        })
+        Ok(crate::rtk_scene::file_name(&p, &self.opts.out_dir))
     }
-}
-
-/// `target` relative to folder `base` when both canonicalize, else
-/// `target` made absolute.
-fn relative_path(target: &Path, base: &Path) -> PathBuf {
-    let (Ok(t), Ok(b)) = (std::fs::canonicalize(target), std::fs::canonicalize(base)) else {
-        return std::path::absolute(target).unwrap_or_else(|_| target.to_path_buf());
-    };
-    let (tc, bc): (Vec<_>, Vec<_>) = (t.components().collect(), b.components().collect());
-    let common = tc.iter().zip(&bc).take_while(|(a, b)| a == b).count();
-    if common == 0 {
-        return t;
-    }
-    let mut out = PathBuf::new();
-    for _ in common..bc.len() {
-        out.push("..");
-    }
-    for c in &tc[common..] {
-        out.push(c.as_os_str());
-    }
-    out
 }
 
 /// An object's properties, each marked when the translation reads it.

@@ -194,8 +194,9 @@ struct Parser {
     version: (u32, u32, u32),
 }
 
-/// Read a file's text (a regular file of at most [`MAX_XML_BYTES`], UTF-8).
-fn read_text(path: &Path) -> Result<String, ImportError> {
+/// Read a scene file's text (a regular file of at most [`MAX_XML_BYTES`],
+/// UTF-8): Mitsuba's and pbrt's alike.
+pub(crate) fn read_text(path: &Path) -> Result<String, ImportError> {
     let err = |message: String| ImportError::Read {
         path: path.to_path_buf(),
         message,
@@ -206,7 +207,7 @@ fn read_text(path: &Path) -> Result<String, ImportError> {
     }
     if meta.len() > MAX_XML_BYTES {
         return Err(err(format!(
-            "{} bytes: larger than the {} MiB an XML scene may be",
+            "{} bytes: larger than the {} MiB a scene file may be",
             meta.len(),
             MAX_XML_BYTES >> 20
         )));
