@@ -112,6 +112,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "pinhole",
     "point",
     "polygon",
+    "projector",
     "raycls",
     "roughconductor",
     "slabs",
