@@ -410,7 +410,7 @@ fn size_cases() -> Vec<Case> {
             "width = 8\nheight = 8",
             "width = 16384\nheight = 16384",
             &[
-                "scene.toml: the film of 16384x16384 pixels needs 7168 MiB",
+                "scene.toml: the film of 16384x16384 pixels needs 13312 MiB",
                 "could not be allocated",
             ],
         )
