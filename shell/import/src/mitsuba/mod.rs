@@ -3,6 +3,7 @@
 //! what has no exact rtk equivalent is refused (or, lenient, dropped with a
 //! warning) — never approximated.
 
+pub mod spectrum;
 pub mod transform;
 pub mod translate;
 pub mod xml;

@@ -6,6 +6,7 @@
 //! parameter that only restates rtk's behaviour (Mitsuba's default) is
 //! accepted; any other value of it is refused.
 
+use super::spectrum::{self, Role};
 use super::transform::{Step, Transform};
 use super::xml::{Document, Obj, Prop, Value};
 use crate::error::{ImportError, Loc};
@@ -187,9 +188,10 @@ impl<'o> Props<'o> {
         }
     }
 
-    /// A colour: `<rgb>`, a uniform `<spectrum>` or a `<float>` (grey); a
-    /// texture or a wavelength list is refused here. `None` when absent.
-    pub fn color(&mut self, tx: &mut Tx, name: &str) -> Result<Option<T>, ImportError> {
+    /// A colour: `<rgb>`, a `<spectrum>` (reduced to RGB as Mitsuba's RGB
+    /// variants do for its `role`), a `<float>` (grey) or a texture. `None`
+    /// when absent.
+    pub fn color(&mut self, tx: &mut Tx, name: &str, role: Role) -> Result<Option<T>, ImportError> {
         let Some(p) = self.get(name) else {
             return Ok(None);
         };
@@ -197,14 +199,19 @@ impl<'o> Props<'o> {
             Value::Color(c) => vec3(*c),
             Value::Float(f) => vec3([*f; 3]),
             Value::Int(i) => vec3([*i as f64; 3]),
-            Value::Spectrum(_) => {
-                tx.refuse(ImportError::unsupported(
-                    &p.loc,
-                    format!("{} parameter `{name}`", self.obj.what()),
-                    "a <spectrum> of wavelength:value pairs: its reduction to RGB is not implemented yet",
-                ))?;
-                return Ok(None);
-            }
+            Value::UniformSpectrum(v) => vec3(spectrum::uniform_to_srgb(*v, role)),
+            Value::Spectrum(pairs) => match spectrum::list_to_srgb(pairs, role) {
+                Some(c) => vec3(c),
+                None => {
+                    return Err(ImportError::invalid(
+                        &p.loc,
+                        format!(
+                            "{}: `{name}`: the wavelengths of a <spectrum> must increase",
+                            self.obj.what()
+                        ),
+                    ))
+                }
+            },
             Value::Object(o) if o.tag == "texture" => return textures::texture(tx, o, name),
             _ => return Err(self.wrong(p, "a colour (<rgb>, <spectrum> or <float>)")),
         };

@@ -36,8 +36,10 @@ pub enum Value {
     Bool(bool),
     /// `<string>`.
     Str(String),
-    /// `<rgb>`, or a `<spectrum>` of one value (uniform).
+    /// `<rgb>`.
     Color([f64; 3]),
+    /// `<spectrum value="v">`: uniform (its RGB depends on its use).
+    UniformSpectrum(f64),
     /// `<spectrum value="λ:v, ...">`: wavelength (nm) and value pairs.
     Spectrum(Vec<(f64, f64)>),
     /// `<vector>`.
@@ -59,6 +61,7 @@ impl Value {
             Value::Bool(_) => "boolean",
             Value::Str(_) => "string",
             Value::Color(_) => "rgb",
+            Value::UniformSpectrum(_) => "spectrum",
             Value::Spectrum(_) => "spectrum",
             Value::Vector(_) => "vector",
             Value::Point(_) => "point",
@@ -793,7 +796,7 @@ fn color(v: &str, loc: &Loc) -> Result<[f64; 3], ImportError> {
 /// `<spectrum value="0.5">` (uniform) or `value="400:0.1, 500:0.2"`.
 fn spectrum(v: &str, loc: &Loc) -> Result<Value, ImportError> {
     if !v.contains(':') {
-        return Ok(Value::Color([number(v, loc)?; 3]));
+        return Ok(Value::UniformSpectrum(number(v, loc)?));
     }
     let pairs = v
         .split(',')

@@ -4,6 +4,7 @@
 
 use super::{def, Props, Tx};
 use crate::error::ImportError;
+use crate::mitsuba::spectrum::Role;
 use crate::mitsuba::xml::Obj;
 use crate::rtk_scene::vec3;
 
@@ -23,7 +24,9 @@ pub fn light(tx: &mut Tx, e: &Obj) -> Result<(), ImportError> {
                     None => p.vec3("direction", [0.0, 0.0, 1.0])?,
                 };
             k.push(("direction".into(), vec3(dir)));
-            let irr = p.color(tx, "irradiance")?.unwrap_or(vec3([1.0; 3]));
+            let irr = p
+                .color(tx, "irradiance", Role::Emission)?
+                .unwrap_or(vec3([1.0; 3]));
             k.push(("irradiance".into(), irr));
             k
         }
@@ -34,13 +37,17 @@ pub fn light(tx: &mut Tx, e: &Obj) -> Result<(), ImportError> {
                 None => p.vec3("position", [0.0; 3])?,
             };
             k.push(("position".into(), vec3(pos)));
-            let i = p.color(tx, "intensity")?.unwrap_or(vec3([1.0; 3]));
+            let i = p
+                .color(tx, "intensity", Role::Emission)?
+                .unwrap_or(vec3([1.0; 3]));
             k.push(("intensity".into(), i));
             k
         }
         "constant" => {
             let mut k = def("constant");
-            let r = p.color(tx, "radiance")?.unwrap_or(vec3([1.0; 3]));
+            let r = p
+                .color(tx, "radiance", Role::Emission)?
+                .unwrap_or(vec3([1.0; 3]));
             k.push(("radiance".into(), r));
             k
         }
@@ -89,7 +96,9 @@ fn projector(tx: &mut Tx, p: &mut Props) -> Result<crate::rtk_scene::Keys, Impor
         ));
     }
     tx.uv_source = Some(super::UvSource::Same);
-    let irr = p.color(tx, "irradiance")?.unwrap_or(vec3([1.0; 3]));
+    let irr = p
+        .color(tx, "irradiance", Role::Emission)?
+        .unwrap_or(vec3([1.0; 3]));
     k.push(("irradiance".into(), irr));
     k.push(("scale".into(), toml::Value::Float(p.float("scale", 1.0)?)));
     Ok(k)

@@ -7,6 +7,7 @@
 
 use super::{def, steps, Props, Tx, UvSource};
 use crate::error::ImportError;
+use crate::mitsuba::spectrum::Role;
 use crate::mitsuba::transform::Transform;
 use crate::mitsuba::xml::{Obj, Value};
 use crate::rtk_scene::{inline_table, vec3, Keys};
@@ -186,7 +187,9 @@ fn shape_shader(tx: &mut Tx, s: &Obj) -> Result<String, ImportError> {
     };
     let mut keys = keys.unwrap_or_else(|| diffuse_keys(vec3([0.5; 3]), false));
     let mut p = Props::new(e);
-    let radiance = p.color(tx, "radiance")?.unwrap_or(vec3([1.0; 3]));
+    let radiance = p
+        .color(tx, "radiance", Role::Emission)?
+        .unwrap_or(vec3([1.0; 3]));
     p.finish(tx)?;
     keys.push(("emission".into(), radiance));
     let name = tx
@@ -263,7 +266,9 @@ fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
         return Ok(None);
     }
     let mut p = Props::new(inner);
-    let albedo = p.color(tx, "reflectance")?.unwrap_or(vec3([0.5; 3]));
+    let albedo = p
+        .color(tx, "reflectance", Role::Reflectance)?
+        .unwrap_or(vec3([0.5; 3]));
     p.finish(tx)?;
     Ok(Some(diffuse_keys(albedo, two_sided)))
 }
