@@ -189,9 +189,12 @@ mod tests {
     /// Mitsuba 3.9.1's own `mi.spectrum_list_to_srgb` (scalar_rgb) on the
     /// same lists: bounded and D65-weighted for a reflectance, neither for
     /// an emission.
+    /// A wavelength list, its role and Mitsuba's RGB for it.
+    type Case = (&'static [(f64, f64)], Role, [f64; 3]);
+
     #[test]
     fn matches_mitsubas_reduction() {
-        let cases: [(&[(f64, f64)], Role, [f64; 3]); 4] = [
+        let cases: [Case; 4] = [
             (
                 &[(400.0, 0.78), (500.0, 0.78), (600.0, 0.78), (700.0, 0.78)],
                 Role::Reflectance,
