@@ -102,6 +102,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "grid",
     "kdtree",
     "lambert",
+    "envmap",
     "list",
     "mesh",
     "motion",

@@ -404,6 +404,15 @@ fn conform_passes_every_built_in_camera_light_and_integrator() {
             ],
         ),
         (
+            "envmap",
+            &[],
+            &[
+                "pass  pdf-integrates",
+                "pass  li-matches-le",
+                "skip  delta-light",
+            ],
+        ),
+        (
             "path",
             &[],
             &[

@@ -356,3 +356,103 @@ children = [{ object = "floor", shader = "white" }]
     let centre = (8 * 16 + 8) * 3;
     assert!((img.data[centre] - 0.4).abs() < 1e-4);
 }
+
+/// The `envmap` light against its closed form: a lambert plane facing +y
+/// under a map lit only above the horizon (rows 0 to 2 of 5, so the
+/// bilinear blend never reaches below 90°) receives E = π·(mean of the
+/// columns) — bilinear interpolation, periodic in φ, keeps the columns'
+/// mean — and reflects albedo·mean. The columns differ 4 : 0 : 1 : 3, so
+/// a luminance-sampling density out of step with `pdf_li` would bias the
+/// MIS sum. Turned upside down by `to_world`, only the blend between
+/// rows 2 (lit, now at the horizon) and 3 (dark, now 45° up) reaches the
+/// plane: L = mean·(θ − π/4)/(π/4) for θ in [π/4, π/2], whose cosine-
+/// weighted integral makes the plane albedo·2·mean·(¼ − 1/(2π)), here
+/// (½ − 1/π) of the upright map's — the interpolation in θ checked too.
+#[test]
+fn an_envmap_lights_a_plane_as_the_mean_of_its_sky() {
+    let dir = tempfile::tempdir().unwrap();
+    let sky = dir.path().join("sky.exr");
+    let cols = [4.0f32, 0.0, 1.0, 3.0];
+    image::ImageBuffer::<image::Rgb<f32>, _>::from_fn(4, 5, |x, y| {
+        let v = if y <= 2 { cols[x as usize] } else { 0.0 };
+        image::Rgb([v, 0.5 * v, 0.25 * v])
+    })
+    .save(&sky)
+    .unwrap();
+    let scene = dir.path().join("e.toml");
+    std::fs::write(
+        &scene,
+        r#"
+[render]
+width = 24
+height = 16
+spp = 64
+filter = "box"
+camera = "c"
+root = "floor"
+integrator = { class = "path", max_depth = 2 }
+
+[cameras.c]
+class = "pinhole"
+eye = [0.0, 1.0, 0.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+fov_y = 60.0
+
+[lights.sky]
+class = "envmap"
+radiance = { image_file = "sky.exr" }
+
+[shaders.grey]
+class = "lambert"
+albedo = [0.5, 0.5, 0.5]
+
+[objects.plane]
+class = "polygon"
+points = [[-100.0, 0.0, -100.0], [-100.0, 0.0, 100.0], [100.0, 0.0, 100.0], [100.0, 0.0, -100.0]]
+
+[objects.floor]
+class = "list"
+children = [{ object = "plane", shader = "grey" }]
+"#,
+    )
+    .unwrap();
+    let out = dir.path().join("e.exr");
+    let render = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let r = Run::from(rtk(&args).output().unwrap());
+        assert!(r.ok, "{}", r.stderr);
+        Image::read(&out)
+    };
+    let check = |img: &Image, scale: f64| {
+        let n = (img.data.len() / 3) as f64;
+        for (c, want) in [1.0f64, 0.5, 0.25].into_iter().enumerate() {
+            let want = want * scale;
+            let mean = img
+                .data
+                .iter()
+                .skip(c)
+                .step_by(3)
+                .map(|&v| v as f64)
+                .sum::<f64>()
+                / n;
+            assert!(
+                (mean / want - 1.0).abs() < 0.015,
+                "channel {c}: {mean}, want {want}"
+            );
+        }
+    };
+    check(&render(&[]), 1.0);
+    let flipped = "lights.sky.to_world=[1.0, 0.0, 0.0, 0.0,  0.0, -1.0, 0.0, 0.0,  0.0, 0.0, -1.0, 0.0,  0.0, 0.0, 0.0, 1.0]";
+    check(
+        &render(&["--set", flipped]),
+        0.5 - std::f64::consts::FRAC_1_PI,
+    );
+}

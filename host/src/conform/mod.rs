@@ -329,19 +329,13 @@ impl Params {
     }
 
     /// Make relative paths of `file` and `*_file` keys absolute from `base`
-    /// (the suite's scenes are read from a scratch folder).
+    /// (the suite's scenes are read from a scratch folder), in nested
+    /// tables too (a texture's `image_file`).
     pub fn resolve_files(&mut self, base: &Path) -> Result<()> {
-        let cwd = std::env::current_dir().context("the working directory")?;
-        for (k, v) in self.table.iter_mut() {
-            if k == "file" || k.ends_with("_file") {
-                if let toml::Value::String(s) = v {
-                    let p = Path::new(s.as_str());
-                    if p.is_relative() {
-                        *s = cwd.join(base).join(p).display().to_string();
-                    }
-                }
-            }
-        }
+        let root = std::env::current_dir()
+            .context("the working directory")?
+            .join(base);
+        resolve_in(&mut self.table, &root);
         Ok(())
     }
 
@@ -793,6 +787,21 @@ fn apply_skips(skip: &[(String, String)], label: &str, suite: &mut Suite) -> Res
         }
     }
     Ok(())
+}
+
+/// [`Params::resolve_files`] in one table.
+fn resolve_in(table: &mut toml::Table, root: &Path) {
+    for (k, v) in table.iter_mut() {
+        match v {
+            toml::Value::String(s)
+                if (k == "file" || k.ends_with("_file")) && Path::new(s.as_str()).is_relative() =>
+            {
+                *s = root.join(s.as_str()).display().to_string();
+            }
+            toml::Value::Table(t) => resolve_in(t, root),
+            _ => {}
+        }
+    }
 }
 
 /// What a plugin's README tells the suite, in a fenced block whose info

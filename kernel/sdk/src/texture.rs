@@ -21,8 +21,8 @@
 //! - **checker**: cell `(⌊u·su⌋, ⌊v·sv⌋)` takes `even` when the sum of its
 //!   indices is even, else `odd`; `scale` defaults to [8, 8] (8 × 8 cells
 //!   over the unit square).
-//! - **image**: a PNG or OpenEXR file, read once when the shader is created,
-//!   its path relative to the scene file. Integer images (PNG) are sRGB and
+//! - **image**: a PNG, JPEG, PNM or OpenEXR file, read once when the shader is created,
+//!   its path relative to the scene file. Integer images (PNG, JPEG, PNM) are sRGB and
 //!   decoded to linear; float images (EXR) are used as they are. Alpha is
 //!   ignored. v = 0 is the image's bottom row (the OBJ and OpenGL
 //!   convention); lookups are bilinear between texel centres, wrapping
@@ -246,6 +246,16 @@ impl Texture {
     pub fn size(&self) -> Option<(u32, u32)> {
         match &self.kind {
             Kind::Image { img, .. } => Some((img.width, img.height)),
+            _ => None,
+        }
+    }
+
+    /// An image texture's texels, linear RGB, row by row from the top
+    /// (`None` for the others): what a light that importance-samples its
+    /// image needs.
+    pub fn texels(&self) -> Option<(u32, u32, &[[f32; 3]])> {
+        match &self.kind {
+            Kind::Image { img, .. } => Some((img.width, img.height, &img.texels)),
             _ => None,
         }
     }

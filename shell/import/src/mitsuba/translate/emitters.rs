@@ -52,18 +52,17 @@ pub fn light(tx: &mut Tx, e: &Obj) -> Result<(), ImportError> {
             k
         }
         "projector" => projector(tx, &mut p)?,
+        "envmap" => envmap(tx, &mut p)?,
         "area" => {
             return Err(ImportError::invalid(
                 &e.loc,
                 "an area emitter belongs inside the <shape> that emits",
             ))
         }
-        _ => {
-            return tx.refuse_plugin(
-                e,
-                "rtk translates the emitters directional, point, constant, projector and area",
-            )
-        }
+        _ => return tx.refuse_plugin(
+            e,
+            "rtk translates the emitters directional, point, constant, envmap, projector and area",
+        ),
     };
     p.finish(tx)?;
     let name = tx.out.fresh_name(e.id.as_deref().unwrap_or(&e.ty));
@@ -101,5 +100,36 @@ fn projector(tx: &mut Tx, p: &mut Props) -> Result<crate::rtk_scene::Keys, Impor
         .unwrap_or(vec3([1.0; 3]));
     k.push(("irradiance".into(), irr));
     k.push(("scale".into(), toml::Value::Float(p.float("scale", 1.0)?)));
+    Ok(k)
+}
+
+/// `envmap` → rtk's `envmap`, which evaluates the map as Mitsuba does
+/// (bilinear between texel centres, periodic in φ, poles at the first and
+/// last rows); its own sampling gives the same mean.
+fn envmap(tx: &mut Tx, p: &mut Props) -> Result<crate::rtk_scene::Keys, ImportError> {
+    let mut k = def("envmap");
+    let Some(loc) = p.obj.prop("filename").map(|f| f.loc.clone()) else {
+        return Err(ImportError::invalid(
+            &p.obj.loc,
+            format!("{}: `filename` is required", p.obj.what()),
+        ));
+    };
+    let name = p.string("filename", "")?;
+    let file = tx.file(&loc, &name)?;
+    k.push((
+        "radiance".into(),
+        crate::rtk_scene::inline_table(vec![("image_file".into(), toml::Value::String(file))]),
+    ));
+    k.push(("scale".into(), toml::Value::Float(p.float("scale", 1.0)?)));
+    if let Some(t) = p.transform("to_world")? {
+        let flat: Vec<toml::Value> =
+            t.m.iter()
+                .flatten()
+                .map(|x| toml::Value::Float(*x))
+                .collect();
+        k.push(("to_world".into(), toml::Value::Array(flat)));
+    }
+    // Mitsuba's MIS compensation changes its sampling only, not the mean.
+    p.ignore(&["mis_compensation"]);
     Ok(k)
 }
