@@ -53,6 +53,7 @@ mod conv;
 mod emitter;
 mod gen;
 mod live;
+pub mod microfacet;
 pub mod params;
 mod scene;
 pub mod shading;

@@ -2,9 +2,9 @@
 #![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
+use rtk_kernel::sdk::microfacet::Ggx;
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
-use std::f32::consts::{PI, TAU};
 
 #[derive(Deserialize)]
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
@@ -31,7 +31,7 @@ const ALPHA_MAX: f32 = 1.0;
 const LOBE: u32 = lobe::GLOSSY | lobe::REFLECTION;
 
 struct RoughConductor {
-    alpha: f32,
+    ggx: Ggx,
     r: Color,
 }
 
@@ -46,7 +46,7 @@ impl Plugin for RoughConductor {
             ));
         }
         Ok(RoughConductor {
-            alpha: p.alpha,
+            ggx: Ggx { alpha: p.alpha },
             r: params::reflectance("reflectance", p.reflectance)?,
         })
     }
@@ -84,25 +84,6 @@ fn same_geometric_side(g: &LocalGeom, wo: Vec3, wi: Vec3) -> bool {
 }
 
 impl RoughConductor {
-    /// GGX D(m), `m` local and unit, `m.z > 0`.
-    #[inline]
-    fn d(&self, m: Vec3) -> f32 {
-        let a2 = self.alpha * self.alpha;
-        let k = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
-        1.0 / (PI * a2 * k * k)
-    }
-
-    /// Smith Λ(w) for GGX, `w` local with `w.z > 0`:
-    /// (−1 + √(1 + α² tan²θ)) / 2, written without the cancellation.
-    #[inline]
-    fn lambda(&self, w: Vec3) -> f32 {
-        let x = self.alpha * self.alpha * (w.x * w.x + w.y * w.y) / (w.z * w.z);
-        if !x.is_finite() {
-            return f32::INFINITY;
-        }
-        0.5 * x / (1.0 + (1.0 + x).sqrt())
-    }
-
     /// The half vector of two local directions above the surface, if any.
     #[inline]
     fn half(lo: Vec3, li: Vec3) -> Option<Vec3> {
@@ -118,8 +99,8 @@ impl RoughConductor {
         let Some(m) = Self::half(lo, li) else {
             return 0.0;
         };
-        let g2 = 1.0 / (1.0 + self.lambda(lo) + self.lambda(li));
-        let f = self.d(m) * g2 / (4.0 * lo.z * li.z);
+        let g2 = 1.0 / (1.0 + self.ggx.lambda(lo) + self.ggx.lambda(li));
+        let f = self.ggx.d(m) * g2 / (4.0 * lo.z * li.z);
         if f.is_finite() {
             f
         } else {
@@ -136,37 +117,13 @@ impl RoughConductor {
         if !(lo.dot(m) > 0.0) {
             return 0.0;
         }
-        let g1 = 1.0 / (1.0 + self.lambda(lo));
-        let p = g1 * self.d(m) / (4.0 * lo.z);
+        let g1 = 1.0 / (1.0 + self.ggx.lambda(lo));
+        let p = g1 * self.ggx.d(m) / (4.0 * lo.z);
         if p.is_finite() {
             p
         } else {
             0.0
         }
-    }
-
-    /// A visible normal for `lo` (local, `lo.z > 0`): Heitz 2018, listing 1.
-    fn visible_normal(&self, lo: Vec3, u: [f32; 2]) -> Vec3 {
-        let a = self.alpha;
-        // The view direction in the hemisphere configuration (α = 1).
-        let vh = Vec3::new(a * lo.x, a * lo.y, lo.z).normalize();
-        // An orthonormal basis about it (T1 horizontal).
-        let len2 = vh.x * vh.x + vh.y * vh.y;
-        let t1 = if len2 > 0.0 {
-            Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt()
-        } else {
-            Vec3::X
-        };
-        let t2 = vh.cross(t1);
-        // A point on the projected area: a disk, its lower half squashed.
-        let r = u[0].sqrt();
-        let phi = TAU * u[1];
-        let p1 = r * phi.cos();
-        let s = 0.5 * (1.0 + vh.z);
-        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * (r * phi.sin());
-        // Reprojected onto the hemisphere, back to the ellipsoid.
-        let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-        Vec3::new(a * nh.x, a * nh.y, nh.z.max(0.0)).normalize()
     }
 }
 
@@ -199,7 +156,7 @@ impl Shader for RoughConductor {
         if !(lo.z > 0.0) {
             return None;
         }
-        let m = self.visible_normal(lo, u);
+        let m = self.ggx.visible_normal(lo, u);
         let li = 2.0 * lo.dot(m) * m - lo;
         if !(li.z > 0.0) {
             return None; // reflected into the surface: absorbed
@@ -215,7 +172,7 @@ impl Shader for RoughConductor {
         if !(pdf > 0.0) {
             return None;
         }
-        let (l_o, l_i) = (self.lambda(lo), self.lambda(li));
+        let (l_o, l_i) = (self.ggx.lambda(lo), self.ggx.lambda(li));
         // f·cos/pdf = R · G2 / G1(wo).
         let w = (1.0 + l_o) / (1.0 + l_o + l_i);
         if !w.is_finite() {

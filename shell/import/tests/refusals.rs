@@ -117,12 +117,12 @@ fn cases() -> Vec<Case> {
             names: &[r#"<shape type="sphere">"#, "`flip_normals`"],
         },
         Case {
-            name: "a spectrum of wavelengths",
+            name: "a checkerboard texture",
             xml: body(
-                r#"<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="400:0.1, 700:0.5"/></bsdf></shape>"#,
+                r#"<shape type="sphere"><bsdf type="diffuse"><texture name="reflectance" type="checkerboard"/></bsdf></shape>"#,
             ),
-            at: r#"<spectrum name="reflectance""#,
-            names: &[r#"<bsdf type="diffuse">"#, "`reflectance`"],
+            at: r#"<texture name="reflectance""#,
+            names: &[r#"<texture type="checkerboard">"#],
         },
         Case {
             name: "an unjittered stratified sampler",

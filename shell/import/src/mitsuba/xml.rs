@@ -553,8 +553,17 @@ impl Parser {
                 prop(Value::Color(color(&v, loc)?), param)
             }
             "spectrum" if node.attribute("type").is_none() => {
-                let (v, param) = self.attr(node, "value", loc)?;
-                prop(spectrum(&v, loc)?, param)
+                match self.opt_attr(node, "filename", loc)? {
+                    Some((name, _)) => {
+                        let path = find(&self.search, &name)
+                            .unwrap_or_else(|| relative_to(&loc.file, &name));
+                        prop(spectrum_file(&path, loc)?, None)
+                    }
+                    None => {
+                        let (v, param) = self.attr(node, "value", loc)?;
+                        prop(spectrum(&v, loc)?, param)
+                    }
+                }
             }
             "vector" | "point" => {
                 let v = self.xyz(node, loc, 0.0)?;
@@ -807,6 +816,52 @@ fn spectrum(v: &str, loc: &Loc) -> Result<Value, ImportError> {
             Ok((number(l, loc)?, number(x, loc)?))
         })
         .collect::<Result<Vec<_>, ImportError>>()?;
+    Ok(Value::Spectrum(pairs))
+}
+
+/// A `<spectrum filename="...">`: Mitsuba's `.spd` format
+/// (`spectrum_from_file` in `src/core/spectrum.cpp`), lines of a wavelength
+/// in nm and a value, `#` starting a comment to the end of its line.
+fn spectrum_file(path: &Path, loc: &Loc) -> Result<Value, ImportError> {
+    let shown = path.display();
+    if path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        != Some("spd".into())
+    {
+        return Err(ImportError::invalid(
+            loc,
+            format!("<spectrum>: {shown}: a spectrum file must be a `.spd` file, as Mitsuba's"),
+        ));
+    }
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| ImportError::invalid(loc, format!("<spectrum>: cannot read {shown}: {e}")))?;
+    let mut pairs = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let data = line.split('#').next().unwrap_or("");
+        let fields: Vec<&str> = data.split_whitespace().collect();
+        let bad = |what: &str| {
+            ImportError::invalid(loc, format!("<spectrum>: {shown}:{}: {what}", i + 1))
+        };
+        match fields.as_slice() {
+            [] => {}
+            [l, v] => {
+                let parse = |t: &str| t.parse::<f64>().ok().filter(|x| x.is_finite());
+                match (parse(l), parse(v)) {
+                    (Some(l), Some(v)) => pairs.push((l, v)),
+                    _ => return Err(bad("expected a wavelength and a value")),
+                }
+            }
+            _ => return Err(bad("expected two numbers on the line")),
+        }
+    }
+    if pairs.is_empty() {
+        return Err(ImportError::invalid(
+            loc,
+            format!("<spectrum>: {shown} holds no wavelength–value pairs"),
+        ));
+    }
     Ok(Value::Spectrum(pairs))
 }
 
