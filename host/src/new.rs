@@ -116,6 +116,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "projector",
     "raycls",
     "roughconductor",
+    "roughplastic",
     "slabs",
     "sphere",
     "thinlens",

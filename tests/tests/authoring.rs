@@ -195,6 +195,7 @@ fn conform_passes_every_built_in_shader() {
         "conductor",
         "dielectric",
         "roughconductor",
+        "roughplastic",
     ] {
         let lib = bin_dir().join(format!("librtk_{class}.so"));
         let r = conform(&lib);

@@ -53,6 +53,14 @@ fn cases() -> Vec<Case> {
             names: &[r#"<bsdf type="plastic">"#],
         },
         Case {
+            name: "a Beckmann rough plastic",
+            xml: body(
+                r#"<shape type="sphere"><bsdf type="roughplastic"><float name="alpha" value="0.2"/></bsdf></shape>"#,
+            ),
+            at: r#"<bsdf type="roughplastic""#,
+            names: &[r#"<bsdf type="roughplastic">"#, "beckmann"],
+        },
+        Case {
             name: "an unknown shape plugin",
             xml: body(r#"<shape type="cube"/>"#),
             at: r#"<shape type="cube""#,

@@ -16,6 +16,7 @@ use std::path::Path;
 use std::rc::Rc;
 use toml::Value as T;
 
+mod bsdfs;
 mod emitters;
 mod scene_objects;
 mod sensor;

@@ -258,12 +258,16 @@ fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
     } else {
         b
     };
-    if inner.ty != "diffuse" {
-        tx.refuse_plugin(
-            inner,
-            "rtk translates the BSDFs diffuse and twosided(diffuse) so far",
-        )?;
-        return Ok(None);
+    match inner.ty.as_str() {
+        "diffuse" => {}
+        "roughplastic" if !two_sided => return super::bsdfs::roughplastic(tx, inner),
+        _ => {
+            tx.refuse_plugin(
+                inner,
+                "rtk translates the BSDFs diffuse, twosided(diffuse) and roughplastic so far",
+            )?;
+            return Ok(None);
+        }
     }
     let mut p = Props::new(inner);
     let albedo = p

@@ -1,0 +1,109 @@
+//! BSDFs beyond `diffuse`: Mitsuba's parameters mapped onto the rtk shader
+//! that implements the same model, refusing what that shader lacks.
+
+use super::{def, Props, Tx};
+use crate::error::ImportError;
+use crate::mitsuba::spectrum::Role;
+use crate::mitsuba::xml::{Obj, Value};
+use crate::rtk_scene::{vec3, Keys};
+use toml::Value as T;
+
+/// Mitsuba's named indices of refraction (`include/mitsuba/render/ior.h`,
+/// stored as f32 there, so given here as the f32 values print).
+const IOR: &[(&str, f32)] = &[
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+/// An index of refraction: a `<float>`, or a `<string>` naming one of
+/// Mitsuba's materials (case-insensitive), or `default`.
+fn ior(p: &mut Props, name: &str, default: &str) -> Result<f64, ImportError> {
+    let what = p.obj.what();
+    let (text, loc) = match p.get(name) {
+        None => (default.to_string(), p.obj.loc.clone()),
+        Some(prop) => match &prop.value {
+            Value::Float(f) => return Ok(*f),
+            Value::Int(i) => return Ok(*i as f64),
+            Value::Str(s) => (s.clone(), prop.loc.clone()),
+            _ => {
+                return Err(ImportError::invalid(
+                    &prop.loc,
+                    format!("{what}: `{name}` must be a <float> or a <string> naming a material"),
+                ))
+            }
+        },
+    };
+    let lower = text.to_lowercase();
+    match IOR.iter().find(|(n, _)| *n == lower) {
+        // Through the f32's shortest decimal, so that 1.5046 stays 1.5046.
+        Some((_, v)) => Ok(v.to_string().parse().unwrap_or(*v as f64)),
+        None => Err(ImportError::invalid(
+            &loc,
+            format!(
+                "{what}: `{name}` = \"{text}\" is not one of Mitsuba's named indices ({})",
+                IOR.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+            ),
+        )),
+    }
+}
+
+/// `roughplastic` → rtk's `roughplastic` (the same model and tables).
+/// `None` when lenient dropped it.
+pub(super) fn roughplastic(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let mut p = Props::new(b);
+    // Mitsuba's microfacet default is Beckmann; rtk's shader is GGX.
+    let dist = p.string("distribution", "beckmann")?;
+    if !dist.eq_ignore_ascii_case("ggx") {
+        tx.refuse_plugin(
+            b,
+            &format!("distribution `{dist}`: rtk's roughplastic is GGX only (Mitsuba's default is beckmann)"),
+        )?;
+        return Ok(None);
+    }
+    // Sampling only: the image's mean is the same either way.
+    p.ignore(&["sample_visible"]);
+    let mut k = def("roughplastic");
+    k.push(("alpha".into(), T::Float(p.float("alpha", 0.1)?)));
+    k.push((
+        "int_ior".into(),
+        T::Float(ior(&mut p, "int_ior", "polypropylene")?),
+    ));
+    k.push(("ext_ior".into(), T::Float(ior(&mut p, "ext_ior", "air")?)));
+    let rho = p
+        .color(tx, "diffuse_reflectance", Role::Reflectance)?
+        .unwrap_or(vec3([0.5; 3]));
+    k.push(("diffuse_reflectance".into(), rho));
+    if let Some(s) = p.color(tx, "specular_reflectance", Role::Reflectance)? {
+        if !matches!(s, T::Array(_)) {
+            tx.refuse_plugin(b, "a textured specular_reflectance is not translated")?;
+            return Ok(None);
+        }
+        k.push(("specular_reflectance".into(), s));
+    }
+    if p.bool("nonlinear", false)? {
+        k.push(("nonlinear".into(), T::Boolean(true)));
+    }
+    p.finish(tx)?;
+    Ok(Some(k))
+}
