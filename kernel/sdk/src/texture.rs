@@ -23,7 +23,7 @@
 //!   over the unit square).
 //! - **image**: a PNG, JPEG, PNM or OpenEXR file, read once when the shader is created,
 //!   its path relative to the scene file. Integer images (PNG, JPEG, PNM) are sRGB and
-//!   decoded to linear; float images (EXR) are used as they are. Alpha is
+//!   decoded to linear (unless `raw = true`: data, value / 255); float images (EXR) are used as they are. Alpha is
 //!   ignored. v = 0 is the image's bottom row (the OBJ and OpenGL
 //!   convention); lookups are bilinear between texel centres, wrapping
 //!   around the edges. `scale` defaults to [1, 1]. The file must be a
@@ -95,6 +95,9 @@ pub struct Lookup {
     /// v = 0 at the image's top row (Mitsuba's convention) instead of its
     /// bottom row.
     pub v_top: bool,
+    /// Integer images (PNG, JPEG, PNM) taken as stored, value / 255, not
+    /// decoded from sRGB: data such as a height field (Mitsuba's `raw`).
+    pub raw: bool,
 }
 
 impl Default for Lookup {
@@ -104,6 +107,7 @@ impl Default for Lookup {
             wrap: Wrap::Repeat,
             nearest: false,
             v_top: false,
+            raw: false,
         }
     }
 }
@@ -174,7 +178,7 @@ impl TextureParam {
                 }
                 let k = format!("{key}.image_file");
                 let path = env.resolve(file);
-                let img = TexImage::load(&path)
+                let img = TexImage::load(&path, lookup.raw)
                     .map_err(|e| PluginError::key(&k, format!("`{file}`: {e}")))?;
                 for (i, t) in img.texels.iter().enumerate() {
                     let (x, y) = (i as u32 % img.width, i as u32 / img.width);
@@ -305,6 +309,36 @@ impl Texture {
     }
 }
 
+/// Mitsuba's luminance weights (linear sRGB primaries, `luminance()`).
+const LUMINANCE: [f32; 3] = [0.212671, 0.715160, 0.072169];
+
+impl Texture {
+    /// ∂L/∂u and ∂L/∂v of the luminance `L` of [`Texture::eval`] at `uv`:
+    /// the slope a bump map needs. Exact for the bilinear lookup within
+    /// its cell (Mitsuba's `eval_1_grad`); 0 for constants, checkers and
+    /// nearest-texel images, which are flat almost everywhere.
+    pub fn gradient(&self, uv: [f32; 2]) -> [f32; 2] {
+        let Kind::Image { img, scale, lookup } = &self.kind else {
+            return [0.0; 2];
+        };
+        if lookup.nearest {
+            return [0.0; 2];
+        }
+        let (u, v) = (uv[0] * scale[0], uv[1] * scale[1]);
+        let m = lookup.to_uv.unwrap_or([1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+        let (gu, gv) = img.slope(
+            m[0] * u + m[1] * v + m[2],
+            m[3] * u + m[4] * v + m[5],
+            lookup,
+        );
+        // Through the affine map (its transpose) and the scale.
+        [
+            (m[0] * gu + m[3] * gv) * scale[0],
+            (m[1] * gu + m[4] * gv) * scale[1],
+        ]
+    }
+}
+
 /// A decoded image: linear RGB, row 0 at the top.
 #[derive(Clone, Debug)]
 struct TexImage {
@@ -335,8 +369,9 @@ fn wrap(x: f32) -> f32 {
 }
 
 impl TexImage {
-    /// Read and decode an image file, within the limits of the module.
-    fn load(path: &Path) -> Result<TexImage, String> {
+    /// Read and decode an image file, within the limits of the module;
+    /// `raw`: integer images not decoded from sRGB.
+    fn load(path: &Path, raw: bool) -> Result<TexImage, String> {
         let bytes = read_limited(path, MAX_FILE_BYTES)?;
         let reader = || {
             image::ImageReader::new(std::io::Cursor::new(bytes.as_slice()))
@@ -356,10 +391,11 @@ impl TexImage {
         limits.max_alloc = Some(2 << 30);
         reader.limits(limits);
         let img = reader.decode().map_err(|e| e.to_string())?;
-        let linear = matches!(
-            img,
-            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
-        );
+        let linear = raw
+            || matches!(
+                img,
+                image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
+            );
         let rgb = img.into_rgb32f();
         let (width, height) = rgb.dimensions();
         let texels = rgb
@@ -440,6 +476,31 @@ impl TexImage {
     }
 }
 
+impl TexImage {
+    /// ∂L/∂u, ∂L/∂v of the bilinear [`TexImage::lookup`] (luminance) at
+    /// (u, v) after any `to_uv`: the derivative of the interpolation
+    /// within the cell of four texels, times the resolution.
+    fn slope(&self, u: f32, v: f32, l: &Lookup) -> (f32, f32) {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let (v, dv) = if l.v_top { (v, 1.0) } else { (1.0 - v, -1.0) };
+        let lum = |x: i64, y: i64| {
+            let t = self.texels[(l.wrap.index(y, h) * w + l.wrap.index(x, w)) as usize];
+            t[0] * LUMINANCE[0] + t[1] * LUMINANCE[1] + t[2] * LUMINANCE[2]
+        };
+        let (x, y) = (u * w as f32 - 0.5, v * h as f32 - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let f00 = lum(x0, y0);
+        let f10 = lum(x0.saturating_add(1), y0);
+        let f01 = lum(x0, y0.saturating_add(1));
+        let f11 = lum(x0.saturating_add(1), y0.saturating_add(1));
+        let dx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01);
+        let dy = (1.0 - fx) * (f01 - f00) + fx * (f11 - f10);
+        (dx * w as f32, dy * h as f32 * dv)
+    }
+}
+
 /// Read a whole regular file of at most `max` bytes (a FIFO or a device is
 /// refused before it is opened, a file that grows is cut off and refused).
 fn read_limited(path: &Path, max: u64) -> Result<Vec<u8>, String> {
@@ -479,6 +540,7 @@ struct Table {
     wrap: Option<String>,
     filter: Option<String>,
     v_origin: Option<String>,
+    raw: Option<bool>,
 }
 
 impl Table {
@@ -517,6 +579,7 @@ impl Table {
             wrap,
             nearest,
             v_top,
+            raw: self.raw.unwrap_or(false),
         })
     }
 }
@@ -558,11 +621,14 @@ impl<'de> Visitor<'de> for TextureVisitor {
 
     fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
         let t = Table::deserialize(de::value::MapAccessDeserializer::new(map))?;
-        let image_only =
-            t.to_uv.is_some() || t.wrap.is_some() || t.filter.is_some() || t.v_origin.is_some();
+        let image_only = t.to_uv.is_some()
+            || t.wrap.is_some()
+            || t.filter.is_some()
+            || t.v_origin.is_some()
+            || t.raw.is_some();
         if t.checker.is_some() && image_only {
             return Err(de::Error::custom(
-                "`to_uv`, `wrap`, `filter` and `v_origin` belong to an `image_file` texture",
+                "`to_uv`, `wrap`, `filter`, `v_origin` and `raw` belong to an `image_file` texture",
             ));
         }
         let lookup = t.lookup()?;
@@ -796,6 +862,57 @@ mod tests {
             .unwrap_err();
         assert!(e.message.contains("wrap `tile`"), "{e}");
         let e = parse_params::<P>(r#"{"albedo": {"checker": {}, "wrap": "clamp"}}"#).unwrap_err();
+        assert!(e.message.contains("belong to an `image_file`"), "{e}");
+    }
+
+    /// `gradient` is the derivative of `eval`'s luminance: central
+    /// differences inside bilinear cells agree, through `to_uv`, `scale`
+    /// and either v origin; `raw` keeps integer texels as stored.
+    #[test]
+    fn gradient_is_the_slope_of_the_lookup_and_raw_skips_srgb() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = image::RgbImage::new(5, 4);
+        for (x, y, p) in img.enumerate_pixels_mut() {
+            *p = image::Rgb([
+                (40 * x + 25 * y) as u8,
+                (7 * x * y) as u8,
+                200 - (30 * y) as u8,
+            ]);
+        }
+        img.save(dir.path().join("h.png")).unwrap();
+        let dir_s = dir.path().to_str().unwrap();
+        let tex = |extra: &str| {
+            let json = format!(r#"{{"albedo": {{"image_file": "h.png"{extra}}}}}"#);
+            let p: P = parse_params(&json).unwrap();
+            p.albedo.color("albedo", &env(dir_s)).unwrap()
+        };
+        let raw = tex(r#", "raw": true, "filter": "nearest", "v_origin": "top""#);
+        let c = raw.eval([0.5 / 5.0, 0.5 / 4.0]).to_array();
+        assert!((c[2] - 200.0 / 255.0).abs() < 1e-6, "{c:?}");
+        assert_eq!(raw.gradient([0.3, 0.3]), [0.0, 0.0], "nearest is flat");
+        let lum = |t: &Texture, u: f32, v: f32| {
+            let c = t.eval([u, v]).to_array();
+            (0..3).map(|k| c[k] * LUMINANCE[k]).sum::<f32>()
+        };
+        for extra in [
+            r#", "raw": true"#,
+            r#", "v_origin": "top", "wrap": "mirror""#,
+            r#", "raw": true, "to_uv": [1.5, 0.5, 0.1, -0.3, 2.0, 0.2], "scale": [1.25, 0.8]"#,
+        ] {
+            let t = tex(extra);
+            for (u, v) in [(0.31f32, 0.47f32), (0.62, 0.18), (0.13, 0.83)] {
+                let h = 1e-3;
+                let du = (lum(&t, u + h, v) - lum(&t, u - h, v)) / (2.0 * h);
+                let dv = (lum(&t, u, v + h) - lum(&t, u, v - h)) / (2.0 * h);
+                let g = t.gradient([u, v]);
+                assert!(
+                    (g[0] - du).abs() < 2e-2 * (1.0 + du.abs())
+                        && (g[1] - dv).abs() < 2e-2 * (1.0 + dv.abs()),
+                    "{extra} at ({u}, {v}): {g:?} vs ({du}, {dv})"
+                );
+            }
+        }
+        let e = parse_params::<P>(r#"{"albedo": {"checker": {}, "raw": true}}"#).unwrap_err();
         assert!(e.message.contains("belong to an `image_file`"), "{e}");
     }
 

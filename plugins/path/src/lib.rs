@@ -49,9 +49,13 @@ impl Plugin for Path {
 }
 
 /// What the surface fields the path reads: position, both normals, uv
-/// (textures).
-const MASK: u32 =
-    geom_mask::POSITION | geom_mask::GEOMETRIC_NORMAL | geom_mask::SHADING_NORMAL | geom_mask::UV;
+/// (textures) and the tangents dp/du, dp/dv (bump maps tilt the normal
+/// along them; an object computes them for the one hit shaded).
+const MASK: u32 = geom_mask::POSITION
+    | geom_mask::GEOMETRIC_NORMAL
+    | geom_mask::SHADING_NORMAL
+    | geom_mask::UV
+    | geom_mask::TANGENTS;
 
 /// How light found by the previous segment's direction is weighted.
 #[derive(Clone, Copy)]

@@ -107,3 +107,48 @@ pub(super) fn roughplastic(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportE
     p.finish(tx)?;
     Ok(Some(k))
 }
+
+/// `bumpmap` around a `diffuse` → `lambert` with `bump_map` and
+/// `bump_scale` (the same tilt and shadowing term). `None` when lenient
+/// dropped it.
+pub(super) fn bumpmap(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let nested: Vec<_> = b.children_tagged("bsdf").collect();
+    let inner = match nested[..] {
+        [one] if one.ty == "diffuse" => one,
+        _ => {
+            tx.refuse_plugin(b, "rtk translates a bumpmap around one diffuse BSDF")?;
+            return Ok(None);
+        }
+    };
+    let mut p = Props::new(b);
+    let scale = p.float("scale", 1.0)?;
+    for flag in ["use_shadowing_function", "flip_invalid_normals"] {
+        p.only_default(
+            tx,
+            flag,
+            &Value::Bool(true),
+            "rtk's bump map always applies Mitsuba's default rule",
+        )?;
+    }
+    // Mitsuba takes the first texture among the properties, whatever its name.
+    let height = b.props.iter().find_map(|q| match &q.value {
+        Value::Object(o) if o.tag == "texture" => Some((q.name.clone(), o.clone())),
+        _ => None,
+    });
+    let Some((name, tex)) = height else {
+        return Err(ImportError::invalid(
+            &b.loc,
+            format!("{}: needs a height <texture>", b.what()),
+        ));
+    };
+    p.get(&name);
+    let Some(map) = super::textures::texture(tx, &tex, &name)? else {
+        return Ok(None);
+    };
+    p.finish(tx)?;
+    let albedo = super::scene_objects::diffuse_albedo(tx, inner)?;
+    let mut k = super::scene_objects::diffuse_keys(albedo, false);
+    k.push(("bump_map".into(), map));
+    k.push(("bump_scale".into(), T::Float(scale)));
+    Ok(Some(k))
+}

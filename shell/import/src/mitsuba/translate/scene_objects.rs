@@ -199,7 +199,7 @@ fn shape_shader(tx: &mut Tx, s: &Obj) -> Result<String, ImportError> {
     Ok(name)
 }
 
-fn diffuse_keys(albedo: T, two_sided: bool) -> Keys {
+pub(super) fn diffuse_keys(albedo: T, two_sided: bool) -> Keys {
     let mut k = def("lambert");
     k.push(("albedo".into(), albedo));
     if !two_sided {
@@ -261,18 +261,25 @@ fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
     match inner.ty.as_str() {
         "diffuse" => {}
         "roughplastic" if !two_sided => return super::bsdfs::roughplastic(tx, inner),
+        "bumpmap" if !two_sided => return super::bsdfs::bumpmap(tx, inner),
         _ => {
             tx.refuse_plugin(
                 inner,
-                "rtk translates the BSDFs diffuse, twosided(diffuse) and roughplastic so far",
+                "rtk translates the BSDFs diffuse, twosided(diffuse), roughplastic and bumpmap(diffuse) so far",
             )?;
             return Ok(None);
         }
     }
-    let mut p = Props::new(inner);
+    Ok(Some(diffuse_keys(diffuse_albedo(tx, inner)?, two_sided)))
+}
+
+/// A `diffuse` BSDF's albedo (Mitsuba's default 0.5, also where lenient
+/// dropped its texture).
+pub(super) fn diffuse_albedo(tx: &mut Tx, d: &Obj) -> Result<T, ImportError> {
+    let mut p = Props::new(d);
     let albedo = p
         .color(tx, "reflectance", Role::Reflectance)?
         .unwrap_or(vec3([0.5; 3]));
     p.finish(tx)?;
-    Ok(Some(diffuse_keys(albedo, two_sided)))
+    Ok(albedo)
 }

@@ -50,16 +50,8 @@ pub fn texture(tx: &mut Tx, o: &Obj, key: &str) -> Result<Option<T>, ImportError
     check_size(&tx.doc.resolve(&f.loc, name), &f.loc)?;
     let lower = name.to_ascii_lowercase();
     let float = lower.ends_with(".exr") || lower.ends_with(".hdr") || lower.ends_with(".pfm");
-    if !float {
-        p.only_default(
-            tx,
-            "raw",
-            &Value::Bool(false),
-            "rtk decodes 8-bit images as sRGB; raw (linear) 8-bit textures are not supported",
-        )?;
-    } else {
-        p.ignore(&["raw"]);
-    }
+    // Float images are linear either way; 8-bit ones are sRGB unless raw.
+    let raw = p.bool("raw", false)? && !float;
     let filter = p.string("filter_type", "bilinear")?;
     let wrap = p.string("wrap_mode", "repeat")?;
     for (k, v, ok) in [
@@ -101,6 +93,9 @@ pub fn texture(tx: &mut Tx, o: &Obj, key: &str) -> Result<Option<T>, ImportError
     k.push(("wrap".into(), T::String(wrap)));
     k.push(("filter".into(), T::String(filter)));
     k.push(("v_origin".into(), T::String("top".into())));
+    if raw {
+        k.push(("raw".into(), T::Boolean(true)));
+    }
     Ok(Some(inline_table(k)))
 }
 
