@@ -111,6 +111,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "path",
     "phong",
     "pinhole",
+    "plastic",
     "point",
     "polygon",
     "projector",

@@ -196,6 +196,7 @@ fn conform_passes_every_built_in_shader() {
         "dielectric",
         "roughconductor",
         "roughplastic",
+        "plastic",
     ] {
         let lib = bin_dir().join(format!("librtk_{class}.so"));
         let r = conform(&lib);

@@ -359,5 +359,5 @@ fn materials_scene_renders() {
     for kind in ["reflection", "refraction", "scatter", "shadow"] {
         assert!(s["rays"][kind].as_u64().unwrap() > 0, "{kind}: {s}");
     }
-    assert_eq!(s["shaders_created"], 8);
+    assert_eq!(s["shaders_created"], 9);
 }

@@ -48,9 +48,9 @@ fn cases() -> Vec<Case> {
     vec![
         Case {
             name: "an unknown BSDF plugin",
-            xml: body(r#"<shape type="sphere"><bsdf type="plastic"/></shape>"#),
-            at: r#"<bsdf type="plastic""#,
-            names: &[r#"<bsdf type="plastic">"#],
+            xml: body(r#"<shape type="sphere"><bsdf type="principled"/></shape>"#),
+            at: r#"<bsdf type="principled""#,
+            names: &[r#"<bsdf type="principled">"#],
         },
         Case {
             name: "a Beckmann rough plastic",
@@ -227,13 +227,13 @@ fn lenient_warns_once_per_dropped_thing() {
         "",
         BOX,
         r#"<shape type="sphere"><float name="a" value="1"/><float name="b" value="2"/></shape>
-    <bsdf type="plastic" id="shared"/>
+    <bsdf type="principled" id="shared"/>
     <shape type="sphere"><ref id="shared"/></shape>
     <shape type="sphere"><ref id="shared"/></shape>"#,
     );
     let done = import_text(dir.path(), &xml, true).unwrap();
-    // hide_emitters, a, b, and the shared plastic once; the four spheres
-    // all stay, the plastic's two with Mitsuba's default diffuse.
+    // hide_emitters, a, b, and the shared principled once; the four spheres
+    // all stay, the principled one's two with Mitsuba's default diffuse.
     assert_eq!(done.warnings.len(), 4, "{:#?}", done.warnings);
     assert_eq!(done.toml.matches("mitsuba_default_diffuse\" }").count(), 4);
 }

@@ -85,11 +85,33 @@ pub(super) fn roughplastic(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportE
     p.ignore(&["sample_visible"]);
     let mut k = def("roughplastic");
     k.push(("alpha".into(), T::Float(p.float("alpha", 0.1)?)));
+    if !coat(tx, b, &mut p, &mut k)? {
+        return Ok(None);
+    }
+    p.finish(tx)?;
+    Ok(Some(k))
+}
+
+/// `plastic` → rtk's `plastic` (the same model and Fresnel fits). `None`
+/// when lenient dropped it.
+pub(super) fn plastic(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let mut p = Props::new(b);
+    let mut k = def("plastic");
+    if !coat(tx, b, &mut p, &mut k)? {
+        return Ok(None);
+    }
+    p.finish(tx)?;
+    Ok(Some(k))
+}
+
+/// The keys a plastic's coat and base share (indices, colours,
+/// `nonlinear`), pushed onto `k`; false when lenient dropped the BSDF.
+fn coat(tx: &mut Tx, b: &Obj, p: &mut Props, k: &mut Keys) -> Result<bool, ImportError> {
     k.push((
         "int_ior".into(),
-        T::Float(ior(&mut p, "int_ior", "polypropylene")?),
+        T::Float(ior(p, "int_ior", "polypropylene")?),
     ));
-    k.push(("ext_ior".into(), T::Float(ior(&mut p, "ext_ior", "air")?)));
+    k.push(("ext_ior".into(), T::Float(ior(p, "ext_ior", "air")?)));
     let rho = p
         .color(tx, "diffuse_reflectance", Role::Reflectance)?
         .unwrap_or(vec3([0.5; 3]));
@@ -97,15 +119,14 @@ pub(super) fn roughplastic(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportE
     if let Some(s) = p.color(tx, "specular_reflectance", Role::Reflectance)? {
         if !matches!(s, T::Array(_)) {
             tx.refuse_plugin(b, "a textured specular_reflectance is not translated")?;
-            return Ok(None);
+            return Ok(false);
         }
         k.push(("specular_reflectance".into(), s));
     }
     if p.bool("nonlinear", false)? {
         k.push(("nonlinear".into(), T::Boolean(true)));
     }
-    p.finish(tx)?;
-    Ok(Some(k))
+    Ok(true)
 }
 
 /// `bumpmap` around a `diffuse` → `lambert` with `bump_map` and
