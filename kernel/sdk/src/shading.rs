@@ -126,6 +126,25 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     0.5 * (r_par * r_par + r_perp * r_perp)
 }
 
+/// Unpolarised Fresnel reflectance of a conductor of complex index
+/// `eta + i k` (relative to the outside) for the cosine of the incident
+/// angle: Mitsuba 3's `fresnel_conductor` (after Moeller, "Optics", 1988),
+/// the same arithmetic so imported metals match its values.
+#[inline]
+pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
+    let c2 = cos_i * cos_i;
+    let s2 = 1.0 - c2;
+    let s4 = s2 * s2;
+    let t1 = eta * eta - k * k - s2;
+    let a2b2 = (t1 * t1 + 4.0 * k * k * eta * eta).max(0.0).sqrt();
+    let a = (0.5 * (a2b2 + t1)).max(0.0).sqrt();
+    let (term1, term2) = (a2b2 + c2, 2.0 * cos_i * a);
+    let rs = (term1 - term2) / (term1 + term2);
+    let (term3, term4) = (a2b2 * c2 + s4, term2 * s2);
+    let rp = rs * (term3 - term4) / (term3 + term4);
+    0.5 * (rs + rp)
+}
+
 /// Sample a diffuse lobe: a cosine-distributed `wi` on the side of the
 /// shading normal that `wo` is on, and its density.
 #[inline]

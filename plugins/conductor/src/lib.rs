@@ -2,7 +2,7 @@
 #![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::shading::reflect_at;
+use rtk_kernel::sdk::shading::{fresnel_conductor, reflect_at};
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 
@@ -11,6 +11,16 @@ use rtk_kernel::*;
 struct Params {
     #[serde(default = "white")]
     reflectance: [f32; 3],
+    #[serde(default)]
+    eta: Option<[f32; 3]>,
+    #[serde(default)]
+    k: Option<[f32; 3]>,
+    #[serde(default = "yes")]
+    two_sided: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn white() -> [f32; 3] {
@@ -19,6 +29,12 @@ fn white() -> [f32; 3] {
 
 struct Conductor {
     reflectance: Color,
+    /// The metal's complex index per channel (real, imaginary), when its
+    /// Fresnel term is computed; `None`: the reflectance is constant.
+    index: Option<([f32; 3], [f32; 3])>,
+    /// Reflects on both faces; false: nothing from behind the shading
+    /// normal (Mitsuba's `conductor`).
+    two_sided: bool,
 }
 
 /// The one lobe.
@@ -28,8 +44,20 @@ impl Plugin for Conductor {
     type Params = Params;
 
     fn create(p: Params, _env: &Env) -> Result<Self, PluginError> {
+        let index = match (p.eta, p.k) {
+            (Some(eta), Some(k)) => {
+                params::color("eta", eta)?;
+                params::color("k", k)?;
+                Some((eta, k))
+            }
+            (None, None) => None,
+            (Some(_), None) => return Err(PluginError::key("k", "`eta` needs `k` beside it")),
+            (None, Some(_)) => return Err(PluginError::key("eta", "`k` needs `eta` beside it")),
+        };
         Ok(Conductor {
             reflectance: params::reflectance("reflectance", p.reflectance)?,
+            index,
+            two_sided: p.two_sided,
         })
     }
 }
@@ -57,10 +85,21 @@ impl Shader for Conductor {
         }
         // Two-sided: mirror about the shading normal on wo's side.
         let ns = g.ns.v();
+        if !self.two_sided && !(ns.dot(wo) > 0.0) {
+            return None;
+        }
         let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
+        let weight = match &self.index {
+            None => self.reflectance,
+            Some((eta, k)) => {
+                let c = wo.dot(n).min(1.0);
+                let f = [0, 1, 2].map(|i| fresnel_conductor(c, eta[i], k[i]));
+                self.reflectance.times(Color::from_array(f))
+            }
+        };
         Some(BsdfSample {
             wi: reflect_at(g, wo, n).into(),
-            weight: self.reflectance,
+            weight,
             pdf: 1.0,
             lobe: LOBE,
             eta: 1.0,
@@ -98,8 +137,67 @@ mod tests {
         }
     }
 
+    fn params(r: [f32; 3]) -> Params {
+        Params {
+            reflectance: r,
+            eta: None,
+            k: None,
+            two_sided: true,
+        }
+    }
+
+    /// With `eta` and `k`, the weight is Mitsuba's conductor Fresnel term
+    /// (Mitsuba 3.9.1 `scalar_rgb`, eta (0.2, 0.789, 1.5), k (3.9, 6.15,
+    /// 2.0), at θ degrees); one-sided, nothing from behind.
+    #[test]
+    fn complex_index_gives_mitsubas_fresnel() {
+        #[allow(clippy::excessive_precision)]
+        const MITSUBA: [(f32, [f32; 3]); 4] = [
+            (0.0, [9.5195198e-01, 9.2306757e-01, 4.1463414e-01]),
+            (30.0, [9.5158803e-01, 9.2242301e-01, 4.1552275e-01]),
+            (60.0, [9.4588256e-01, 9.0964472e-01, 4.4014394e-01]),
+            (85.0, [9.6660948e-01, 8.9881551e-01, 7.5428689e-01]),
+        ];
+        let m = Conductor::create(
+            Params {
+                eta: Some([0.2, 0.789, 1.5]),
+                k: Some([3.9, 6.15, 2.0]),
+                two_sided: false,
+                ..params([1.0; 3])
+            },
+            &env(),
+        )
+        .unwrap();
+        let g = geom(Vec3::Z, Vec3::Z);
+        let mut ctx = TraceCtx::new(0, 1, 0);
+        for (theta, want) in MITSUBA {
+            let t = theta.to_radians();
+            let wo = Vec3::new(t.sin(), 0.0, t.cos());
+            let s = m.sample(&mut ctx, &g, wo, [0.5; 2], lobe::ALL).unwrap();
+            for (x, y) in s.weight.to_array().iter().zip(want) {
+                assert!(
+                    (x - y).abs() < 1e-5,
+                    "θ {theta}: {:?} vs {want:?}",
+                    s.weight
+                );
+            }
+            let below = Vec3::new(wo.x, 0.0, -wo.z.max(0.1));
+            assert!(m.sample(&mut ctx, &g, below, [0.5; 2], lobe::ALL).is_none());
+        }
+        let e = Conductor::create(
+            Params {
+                eta: Some([0.2; 3]),
+                ..params([1.0; 3])
+            },
+            &env(),
+        )
+        .err()
+        .unwrap();
+        assert_eq!(e.key, "k");
+    }
+
     fn shader(r: [f32; 3]) -> Conductor {
-        Conductor::create(Params { reflectance: r }, &env()).unwrap()
+        Conductor::create(params(r), &env()).unwrap()
     }
 
     fn env() -> Env<'static> {
@@ -189,14 +287,9 @@ mod tests {
 
     #[test]
     fn parameters_are_checked() {
-        let e = Conductor::create(
-            Params {
-                reflectance: [1.2, 0.0, 0.0],
-            },
-            &env(),
-        )
-        .err()
-        .unwrap();
+        let e = Conductor::create(params([1.2, 0.0, 0.0]), &env())
+            .err()
+            .unwrap();
         assert_eq!(e.key, "reflectance");
         let p: Params = parse_params("{}").unwrap();
         assert_eq!(p.reflectance, [1.0; 3]);

@@ -24,6 +24,9 @@ pub enum Role {
     Reflectance,
     /// A radiance, intensity or irradiance: not weighted, only clipped at 0.
     Emission,
+    /// A physical constant such as a conductor's complex index (Mitsuba's
+    /// unbounded textures): a list as an emission, a uniform value as is.
+    Unbounded,
 }
 
 /// RGB of a list of (wavelength in nm, value) pairs, sorted by wavelength.
@@ -53,7 +56,7 @@ pub fn list_to_srgb(pairs: &[(f64, f64)], role: Role) -> Option<[f64; 3]> {
         };
         let weight = match role {
             Role::Reflectance => table(&D65, w) * D65_NORMALIZATION,
-            Role::Emission => 1.0,
+            Role::Emission | Role::Unbounded => 1.0,
         };
         let c = [table(&CIE_X, w), table(&CIE_Y, w), table(&CIE_Z, w)];
         for j in 0..3 {
@@ -64,7 +67,7 @@ pub fn list_to_srgb(pairs: &[(f64, f64)], role: Role) -> Option<[f64; 3]> {
     let rgb = xyz_to_srgb(xyz.map(|x| x * norm));
     Some(match role {
         Role::Reflectance => rgb.map(|c| c.clamp(0.0, 1.0)),
-        Role::Emission => rgb.map(|c| c.max(0.0)),
+        Role::Emission | Role::Unbounded => rgb.map(|c| c.max(0.0)),
     })
 }
 
@@ -74,7 +77,7 @@ pub fn list_to_srgb(pairs: &[(f64, f64)], role: Role) -> Option<[f64; 3]> {
 /// make it so that they match its spectral ones.
 pub fn uniform_to_srgb(v: f64, role: Role) -> [f64; 3] {
     match role {
-        Role::Reflectance => [v; 3],
+        Role::Reflectance | Role::Unbounded => [v; 3],
         Role::Emission => xyz_to_srgb([1.0; 3]).map(|c| c * v),
     }
 }

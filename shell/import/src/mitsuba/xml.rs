@@ -822,7 +822,7 @@ fn spectrum(v: &str, loc: &Loc) -> Result<Value, ImportError> {
 /// A `<spectrum filename="...">`: Mitsuba's `.spd` format
 /// (`spectrum_from_file` in `src/core/spectrum.cpp`), lines of a wavelength
 /// in nm and a value, `#` starting a comment to the end of its line.
-fn spectrum_file(path: &Path, loc: &Loc) -> Result<Value, ImportError> {
+pub fn spectrum_file(path: &Path, loc: &Loc) -> Result<Value, ImportError> {
     let shown = path.display();
     if path
         .extension()

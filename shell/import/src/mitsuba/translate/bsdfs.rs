@@ -173,3 +173,98 @@ pub(super) fn bumpmap(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError>
     k.push(("bump_scale".into(), T::Float(scale)));
     Ok(Some(k))
 }
+
+/// `conductor` → rtk's `conductor`: Mitsuba's Fresnel term for the complex
+/// index (`eta`, `k`, or a named `material`'s spectra), one-sided. `None`
+/// when lenient dropped it.
+pub(super) fn conductor(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let mut p = Props::new(b);
+    let mut k = def("conductor");
+    let Some(index) = complex_index(tx, b, &mut p)? else {
+        return Ok(None);
+    };
+    if let Some((eta, kk)) = index {
+        k.push(("eta".into(), eta));
+        k.push(("k".into(), kk));
+    }
+    if let Some(s) = p.color(tx, "specular_reflectance", Role::Reflectance)? {
+        if !matches!(s, T::Array(_)) {
+            tx.refuse_plugin(b, "a textured specular_reflectance is not translated")?;
+            return Ok(None);
+        }
+        k.push(("reflectance".into(), s));
+    }
+    k.push(("two_sided".into(), T::Boolean(false)));
+    p.finish(tx)?;
+    Ok(Some(k))
+}
+
+/// A conductor's complex index as RGB `eta` and `k`: given, or read from
+/// the named `material`'s `ior/NAME.eta.spd` and `.k.spd` and reduced as
+/// Mitsuba's RGB variants reduce them (unweighted, unclipped above).
+/// `Some(None)`: Mitsuba's `none`, a perfect mirror; `None`: dropped.
+fn complex_index(
+    tx: &mut Tx,
+    b: &Obj,
+    p: &mut Props,
+) -> Result<Option<Option<(T, T)>>, ImportError> {
+    let material = p.string("material", "none")?;
+    let given = b.props.iter().any(|q| q.name == "eta" || q.name == "k");
+    if given && material != "none" {
+        return Err(ImportError::invalid(
+            &b.loc,
+            format!(
+                "{}: give either `eta` and `k` or `material`, not both",
+                b.what()
+            ),
+        ));
+    }
+    if material == "none" && !given {
+        return Ok(Some(None));
+    }
+    if given {
+        let eta = p
+            .color(tx, "eta", Role::Unbounded)?
+            .unwrap_or(vec3([0.0; 3]));
+        let k = p.color(tx, "k", Role::Unbounded)?.unwrap_or(vec3([1.0; 3]));
+        if !matches!((&eta, &k), (T::Array(_), T::Array(_))) {
+            tx.refuse_plugin(b, "a textured `eta` or `k` is not translated")?;
+            return Ok(None);
+        }
+        return Ok(Some(Some((eta, k))));
+    }
+    let [eta, k] = ["eta", "k"].map(|part| material_spectrum(tx, b, &material, part));
+    Ok(Some(Some((eta?, k?))))
+}
+
+/// `ior/MATERIAL.PART.spd` (PART `eta` or `k`), looked for in the
+/// `<path>` folders and in the scene file's folder and each folder above
+/// it (where Mitsuba's test data keeps `ior/`), reduced to RGB.
+fn material_spectrum(tx: &Tx, b: &Obj, material: &str, part: &str) -> Result<T, ImportError> {
+    let name = format!("{material}.{part}.spd");
+    let above = b.loc.file.ancestors().skip(1).map(|d| d.to_path_buf());
+    let dirs: Vec<_> = tx.doc.search.iter().cloned().chain(above).collect();
+    let Some(path) = dirs
+        .iter()
+        .map(|d| d.join("ior").join(&name))
+        .find(|f| f.is_file())
+    else {
+        return Err(ImportError::invalid(
+            &b.loc,
+            format!(
+                "{}: material `{material}`: no ior/{name} in the <path> folders or beside the scene (Mitsuba ships these spectra; copy its `ior` folder next to the scene)",
+                b.what()
+            ),
+        ));
+    };
+    let Value::Spectrum(pairs) = crate::mitsuba::xml::spectrum_file(&path, &b.loc)? else {
+        unreachable!("spectrum_file returns a list");
+    };
+    match crate::mitsuba::spectrum::list_to_srgb(&pairs, Role::Unbounded) {
+        Some(c) => Ok(vec3(c)),
+        None => Err(ImportError::invalid(
+            &b.loc,
+            format!("{}: the wavelengths must increase", path.display()),
+        )),
+    }
+}

@@ -263,10 +263,11 @@ fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
         "roughplastic" if !two_sided => return super::bsdfs::roughplastic(tx, inner),
         "bumpmap" if !two_sided => return super::bsdfs::bumpmap(tx, inner),
         "plastic" if !two_sided => return super::bsdfs::plastic(tx, inner),
+        "conductor" if !two_sided => return super::bsdfs::conductor(tx, inner),
         _ => {
             tx.refuse_plugin(
                 inner,
-                "rtk translates the BSDFs diffuse, twosided(diffuse), plastic, roughplastic and bumpmap(diffuse) so far",
+                "rtk translates the BSDFs diffuse, twosided(diffuse), plastic, roughplastic, conductor and bumpmap(diffuse) so far",
             )?;
             return Ok(None);
         }
