@@ -1,5 +1,6 @@
-//! The isotropic GGX (Trowbridge–Reitz) distribution of microfacet normals,
-//! shared by the rough shaders so that each states only its own lobes.
+//! Isotropic microfacet distributions — GGX (Trowbridge–Reitz) and
+//! Beckmann — shared by the rough shaders so that each states only its own
+//! lobes.
 //!
 //! Everything works in a local frame whose +z is the (shading) normal; the
 //! distribution is isotropic, so any tangent frame about it will do. The
@@ -88,6 +89,120 @@ impl Ggx {
     }
 }
 
+/// Beckmann's distribution with roughness `alpha` (the RMS slope / √2),
+/// with Mitsuba 3's rational approximation of its Smith masking (within
+/// 0.35 %), so that shaders translated from Mitsuba use the same G1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Beckmann {
+    /// α > 0.
+    pub alpha: f32,
+}
+
+impl Beckmann {
+    /// D(m) = exp(−tan²θ/α²) / (π α² cos⁴θ); 0 below the surface.
+    #[inline]
+    pub fn d(&self, m: Vec3) -> f32 {
+        if !(m.z > 0.0) {
+            return 0.0;
+        }
+        let a2 = self.alpha * self.alpha;
+        let c2 = m.z * m.z;
+        let d = (-(m.x * m.x + m.y * m.y) / (c2 * a2)).exp() / (PI * a2 * c2 * c2);
+        if d.is_finite() {
+            d
+        } else {
+            0.0
+        }
+    }
+
+    /// Mitsuba's `smith_g1` for Beckmann: with a = 1 / (α tanθ), 1 for
+    /// a ≥ 1.6, else (3.535 a + 2.181 a²) / (1 + 2.276 a + 2.577 a²); 0
+    /// where `w` sees the back of `m`.
+    #[inline]
+    pub fn g1(&self, w: Vec3, m: Vec3) -> f32 {
+        if !(w.dot(m) * w.z > 0.0) {
+            return 0.0;
+        }
+        let xy = self.alpha * self.alpha * (w.x * w.x + w.y * w.y);
+        if xy == 0.0 {
+            return 1.0;
+        }
+        let a = (w.z * w.z / xy).sqrt();
+        if a >= 1.6 {
+            1.0
+        } else {
+            (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+        }
+    }
+
+    /// A normal drawn with density D(m) cos θm (the classic sampler:
+    /// tan²θ = −α² ln(1 − u₀), φ = 2π u₁).
+    pub fn sample(&self, u: [f32; 2]) -> Vec3 {
+        let t2 = -self.alpha * self.alpha * (1.0 - u[0]).max(f32::MIN_POSITIVE).ln();
+        let c = 1.0 / (1.0 + t2).sqrt();
+        let s = (1.0 - c * c).max(0.0).sqrt();
+        let phi = TAU * u[1];
+        Vec3::new(s * phi.cos(), s * phi.sin(), c)
+    }
+}
+
+/// A distribution of normals as the rough shaders use it: its D, Mitsuba's
+/// G1, and a sampler with its density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Normals {
+    /// GGX, sampled by visible normals.
+    Ggx(Ggx),
+    /// Beckmann, sampled by D cos θ.
+    Beckmann(Beckmann),
+}
+
+impl Normals {
+    /// The distribution by Mitsuba's name (`ggx`, `beckmann`).
+    pub fn named(name: &str, alpha: f32) -> Option<Normals> {
+        match name {
+            "ggx" => Some(Normals::Ggx(Ggx { alpha })),
+            "beckmann" => Some(Normals::Beckmann(Beckmann { alpha })),
+            _ => None,
+        }
+    }
+
+    /// D(m).
+    #[inline]
+    pub fn d(&self, m: Vec3) -> f32 {
+        match self {
+            Normals::Ggx(g) => g.d(m),
+            Normals::Beckmann(b) => b.d(m),
+        }
+    }
+
+    /// Mitsuba's G1(w, m).
+    #[inline]
+    pub fn g1(&self, w: Vec3, m: Vec3) -> f32 {
+        match self {
+            Normals::Ggx(g) => g.g1(w, m),
+            Normals::Beckmann(b) => b.g1(w, m),
+        }
+    }
+
+    /// A normal for the viewer `lo` (local, above the surface).
+    #[inline]
+    pub fn sample(&self, lo: Vec3, u: [f32; 2]) -> Vec3 {
+        match self {
+            Normals::Ggx(g) => g.visible_normal(lo, u),
+            Normals::Beckmann(b) => b.sample(u),
+        }
+    }
+
+    /// Density (solid angle of m) of [`Self::sample`] choosing `m`.
+    #[inline]
+    pub fn pdf(&self, lo: Vec3, m: Vec3) -> f32 {
+        match self {
+            Normals::Ggx(g) => g.visible_pdf(lo, m),
+            Normals::Beckmann(b) => b.d(m) * m.z.max(0.0),
+        }
+    }
+}
+
 /// Nodes and weights of the `n`-point Gauss–Legendre rule on [−1, 1]
 /// (Newton's iteration on Pₙ from Chebyshev guesses, in f64): the rule
 /// Mitsuba's `quad::gauss_legendre` gives, for the tables rough shaders
@@ -170,6 +285,60 @@ mod tests {
             assert!(
                 (visible - 0.8).abs() < 2e-3,
                 "α {alpha}: ∫G1 D (wo·m) = {visible}"
+            );
+        }
+    }
+
+    /// Beckmann: ∫ D cos = 1, its sampler's density integrates to 1
+    /// (checked by E[1/pdf] over its samples against the hemisphere's
+    /// area in the region reached), and Mitsuba's G1 is within 0.35 % of
+    /// the exact Smith term (erf form) at a few angles.
+    #[test]
+    fn beckmann_is_normalised_and_its_g1_is_smiths() {
+        let b = Beckmann { alpha: 0.3 };
+        let n = 4000;
+        let mut area = 0.0f64;
+        for i in 0..n {
+            let t = (i as f64 + 0.5) / n as f64 * std::f64::consts::FRAC_PI_2;
+            let m = Vec3::new(t.sin() as f32, 0.0, t.cos() as f32);
+            area += b.d(m) as f64
+                * m.z as f64
+                * t.sin()
+                * std::f64::consts::TAU
+                * (std::f64::consts::FRAC_PI_2 / n as f64);
+        }
+        assert!((area - 1.0).abs() < 1e-3, "{area}");
+        let mut mean = 0.0f64;
+        for i in 0..256 {
+            for j in 0..256 {
+                let u = [(i as f32 + 0.5) / 256.0, (j as f32 + 0.5) / 256.0];
+                let m = b.sample(u);
+                let p = Normals::Beckmann(b).pdf(Vec3::Z, m) as f64;
+                mean += b.d(m) as f64 * m.z as f64 / p;
+            }
+        }
+        assert!((mean / 65536.0 - 1.0).abs() < 1e-4);
+        // Exact Smith G1 for Beckmann: 2 / (1 + erf(a) + exp(−a²)/(a√π)).
+        fn erf(x: f64) -> f64 {
+            // Abramowitz–Stegun 7.1.26 is too coarse; integrate instead.
+            let n = 20000;
+            let h = x / n as f64;
+            (0..n)
+                .map(|i| (-((i as f64 + 0.5) * h).powi(2)).exp())
+                .sum::<f64>()
+                * h
+                * 2.0
+                / std::f64::consts::PI.sqrt()
+        }
+        for theta in [30.0f64, 60.0, 80.0, 88.0] {
+            let t = theta.to_radians();
+            let w = Vec3::new(t.sin() as f32, 0.0, t.cos() as f32);
+            let a = 1.0 / (0.3 * t.tan());
+            let exact = 2.0 / (1.0 + erf(a) + (-a * a).exp() / (a * std::f64::consts::PI.sqrt()));
+            let g = b.g1(w, Vec3::Z) as f64;
+            assert!(
+                (g - exact).abs() <= 0.0035 * exact + 1e-6,
+                "θ {theta}: {g} vs {exact}"
             );
         }
     }

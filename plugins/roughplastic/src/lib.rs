@@ -4,7 +4,7 @@
 mod tables;
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::microfacet::Ggx;
+use rtk_kernel::sdk::microfacet::Normals;
 use rtk_kernel::sdk::shading::{cosine_hemisphere, fresnel_dielectric};
 use rtk_kernel::sdk::texture::{Texture, TextureParam};
 use rtk_kernel::serde::Deserialize;
@@ -12,11 +12,14 @@ use rtk_kernel::*;
 use std::f32::consts::FRAC_1_PI;
 use tables::RES;
 
-/// The parameter table: Mitsuba 3's `roughplastic` names and defaults
-/// (GGX only; `rtk import` turns named indices into numbers).
+/// The parameter table: Mitsuba 3's `roughplastic` names and defaults, but
+/// for the distribution (rtk's default is GGX, Mitsuba's Beckmann; `rtk
+/// import` writes it, and turns named indices into numbers).
 #[derive(Deserialize)]
 #[serde(crate = "rtk_kernel::serde", deny_unknown_fields)]
 struct Params {
+    #[serde(default = "ggx")]
+    distribution: String,
     #[serde(default = "rough")]
     alpha: f32,
     #[serde(default = "polypropylene")]
@@ -31,6 +34,9 @@ struct Params {
     nonlinear: bool,
 }
 
+fn ggx() -> String {
+    "ggx".into()
+}
 fn rough() -> f32 {
     0.1
 }
@@ -56,7 +62,7 @@ const GLOSSY: u32 = lobe::GLOSSY | lobe::REFLECTION;
 const DIFFUSE: u32 = lobe::DIFFUSE | lobe::REFLECTION;
 
 struct RoughPlastic {
-    ggx: Ggx,
+    normals: Normals,
     /// int_ior / ext_ior.
     eta: f32,
     diffuse: Texture,
@@ -92,7 +98,12 @@ impl Plugin for RoughPlastic {
                 "must differ from ext_ior: an index-matched coat has no interface",
             ));
         }
-        let ggx = Ggx { alpha: p.alpha };
+        let normals = Normals::named(&p.distribution, p.alpha).ok_or_else(|| {
+            PluginError::key(
+                "distribution",
+                format!("`{}`: use \"ggx\" or \"beckmann\"", p.distribution),
+            )
+        })?;
         let eta = p.int_ior / p.ext_ior;
         let diffuse = p
             .diffuse_reflectance
@@ -103,13 +114,13 @@ impl Plugin for RoughPlastic {
             specular.to_array().iter().sum::<f32>() / 3.0,
         );
         Ok(RoughPlastic {
-            ggx,
+            normals,
             eta,
             diffuse,
             specular,
             nonlinear: p.nonlinear,
-            transmittance: tables::transmittance(ggx, eta),
-            internal: tables::internal_reflectance(ggx, eta),
+            transmittance: tables::transmittance(normals, eta),
+            internal: tables::internal_reflectance(normals, eta),
             specular_weight: s_mean / (d_mean + s_mean).max(1e-6),
         })
     }
@@ -157,8 +168,9 @@ impl RoughPlastic {
     /// F(wo·h) D(h) G1(wo, h) G1(wi, h) / (4 cos θo cos θi).
     fn glossy(&self, lo: Vec3, li: Vec3) -> f32 {
         let h = (lo + li).normalize_or_zero();
-        let g = self.ggx.g1(lo, h) * self.ggx.g1(li, h);
-        let f = fresnel_dielectric(lo.dot(h), self.eta) * self.ggx.d(h) * g / (4.0 * lo.z * li.z);
+        let g = self.normals.g1(lo, h) * self.normals.g1(li, h);
+        let f =
+            fresnel_dielectric(lo.dot(h), self.eta) * self.normals.d(h) * g / (4.0 * lo.z * li.z);
         if f.is_finite() {
             f
         } else {
@@ -207,7 +219,12 @@ impl RoughPlastic {
     /// The mixture's density of `li` given `lo` (local, both above).
     fn density(&self, lo: Vec3, li: Vec3, p_glossy: f32) -> f32 {
         let h = (lo + li).normalize_or_zero();
-        let spec = self.ggx.d(h) * self.ggx.g1(lo, h) / (4.0 * lo.z);
+        let spec = self.normals.pdf(lo, h) / (4.0 * lo.dot(h));
+        let spec = if spec.is_finite() && spec > 0.0 {
+            spec
+        } else {
+            0.0
+        };
         let p = p_glossy * spec + (1.0 - p_glossy) * li.z * FRAC_1_PI;
         if p.is_finite() {
             p
@@ -258,7 +275,7 @@ impl Shader for RoughPlastic {
         let ps = self.p_glossy(lo.z, lobes)?;
         // u[0] chooses the lobe and is stretched back to [0, 1).
         let (li, lobe) = if u[0] < ps {
-            let m = self.ggx.visible_normal(lo, [u[0] / ps, u[1]]);
+            let m = self.normals.sample(lo, [u[0] / ps, u[1]]);
             (2.0 * lo.dot(m) * m - lo, GLOSSY)
         } else {
             let u0 = ((u[0] - ps) / (1.0 - ps)).min(1.0 - f32::EPSILON);

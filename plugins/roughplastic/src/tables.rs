@@ -9,7 +9,7 @@
 //! their different parametrisations, and T would differ by ~2e-4.
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::microfacet::{gauss_legendre, Ggx};
+use rtk_kernel::sdk::microfacet::{gauss_legendre, Ggx, Normals};
 use rtk_kernel::sdk::shading::fresnel_dielectric;
 
 /// Cosines at which the transmittance is tabulated (Mitsuba's
@@ -26,16 +26,28 @@ fn at_cosine(mu: f32) -> Vec3 {
     Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
 }
 
-/// ∫ over visible normals of `term(wi, m)`, by Mitsuba's rule: the
-/// `n × n` Gauss–Legendre nodes mapped to [0, 1]², weights × ¼.
-fn over_visible_normals(ggx: Ggx, wi: Vec3, n: usize, term: impl Fn(Vec3) -> f32) -> f32 {
+/// ∫ over visible normals of `term(m)`, by Mitsuba's rule: the `n × n`
+/// Gauss–Legendre nodes mapped to [0, 1]², weights × ¼. GGX maps the
+/// nodes through Mitsuba's visible-normal sampler; Beckmann through its
+/// D cos θ sampler, each node weighted by the visible density over that
+/// one, G1(wi, m) (wi·m)⁺ / (cos θi cos θm), so the integral is the same.
+fn over_visible_normals(normals: Normals, wi: Vec3, n: usize, term: impl Fn(Vec3) -> f32) -> f32 {
     let rule = gauss_legendre(n);
     let mut sum = 0.0f64;
     for &(x, wx) in &rule {
         for &(y, wy) in &rule {
             let u = [(0.5 * x + 0.5) as f32, (0.5 * y + 0.5) as f32];
-            let m = mitsuba_visible_normal(ggx, wi, u);
-            sum += term(m) as f64 * wx * wy * 0.25;
+            let (m, w) = match normals {
+                Normals::Ggx(g) => (mitsuba_visible_normal(g, wi, u), 1.0),
+                Normals::Beckmann(b) => {
+                    let m = b.sample(u);
+                    let w = b.g1(wi, m) * wi.dot(m).max(0.0) / (wi.z * m.z);
+                    (m, if w.is_finite() { w } else { 0.0 })
+                }
+            };
+            if w > 0.0 {
+                sum += (term(m) * w) as f64 * wx * wy * 0.25;
+            }
         }
     }
     sum as f32
@@ -98,11 +110,11 @@ fn nodes(eta: f32) -> usize {
 /// T(μ): the fraction of light arriving at cosine μ that the rough
 /// interface (relative index `eta`) transmits, single scattering: the mean
 /// over visible normals of (1 − F)·G1(refracted). At the `RES` cosines.
-pub fn transmittance(ggx: Ggx, eta: f32) -> [f32; RES] {
+pub fn transmittance(normals: Normals, eta: f32) -> [f32; RES] {
     let mut out = [0.0; RES];
     for (t, mu) in out.iter_mut().zip(cosines()) {
         let wi = at_cosine(mu);
-        *t = over_visible_normals(ggx, wi, nodes(eta), |m| {
+        *t = over_visible_normals(normals, wi, nodes(eta), |m| {
             let c = wi.dot(m);
             let f = fresnel_dielectric(c, eta);
             let Some(wt) = refract_down(wi, m, c, eta) else {
@@ -111,7 +123,7 @@ pub fn transmittance(ggx: Ggx, eta: f32) -> [f32; RES] {
             if wt.z * wi.z >= 0.0 {
                 return 0.0;
             }
-            ggx.g1(wt, m) * (1.0 - f)
+            normals.g1(wt, m) * (1.0 - f)
         });
     }
     out
@@ -132,18 +144,18 @@ fn refract_down(wi: Vec3, m: Vec3, c: f32, eta: f32) -> Option<Vec3> {
 /// reflected back by the interface seen from inside (relative index
 /// 1/`eta`) with probability 2 ∫ R(μ) μ dμ, which Mitsuba takes as twice
 /// the mean of R(μ)·μ over the `RES` cosines.
-pub fn internal_reflectance(ggx: Ggx, eta: f32) -> f32 {
+pub fn internal_reflectance(normals: Normals, eta: f32) -> f32 {
     let inv = 1.0 / eta;
     let sum: f32 = cosines()
         .map(|mu| {
             let wi = at_cosine(mu);
-            let r = over_visible_normals(ggx, wi, nodes(inv), |m| {
+            let r = over_visible_normals(normals, wi, nodes(inv), |m| {
                 let c = wi.dot(m);
                 let wr = 2.0 * c * m - wi;
                 if !(wr.z > 0.0 && wi.z > 0.0) {
                     return 0.0;
                 }
-                ggx.g1(wr, m) * fresnel_dielectric(c, inv)
+                normals.g1(wr, m) * fresnel_dielectric(c, inv)
             });
             r * wi.z
         })
@@ -171,7 +183,7 @@ mod tests {
     /// 0.0918 by reciprocity; Mitsuba's 64-point mean reads about 1/64 low).
     #[test]
     fn the_smooth_limit_is_fresnel() {
-        let ggx = Ggx { alpha: 0.001 };
+        let ggx = Normals::Ggx(Ggx { alpha: 0.001 });
         let t = transmittance(ggx, 1.5);
         for (k, mu) in cosines().enumerate().skip(8) {
             let want = 1.0 - fresnel_dielectric(mu, 1.5);
@@ -190,8 +202,8 @@ mod tests {
     /// grazing; nothing leaves [0, 1].
     #[test]
     fn roughness_spreads_the_transmittance() {
-        let smooth = transmittance(Ggx { alpha: 0.01 }, 1.5);
-        let rough = transmittance(Ggx { alpha: 1.0 }, 1.5);
+        let smooth = transmittance(Normals::Ggx(Ggx { alpha: 0.01 }), 1.5);
+        let rough = transmittance(Normals::Ggx(Ggx { alpha: 1.0 }), 1.5);
         assert!(rough[RES - 1] < smooth[RES - 1]);
         assert!(rough[2] > smooth[2]);
         assert!(rough.iter().chain(&smooth).all(|t| (0.0..=1.0).contains(t)));

@@ -53,12 +53,12 @@ fn cases() -> Vec<Case> {
             names: &[r#"<bsdf type="principled">"#],
         },
         Case {
-            name: "a Beckmann rough plastic",
+            name: "an anisotropic rough plastic",
             xml: body(
-                r#"<shape type="sphere"><bsdf type="roughplastic"><float name="alpha" value="0.2"/></bsdf></shape>"#,
+                r#"<shape type="sphere"><bsdf type="roughplastic"><float name="alpha_u" value="0.2"/></bsdf></shape>"#,
             ),
-            at: r#"<bsdf type="roughplastic""#,
-            names: &[r#"<bsdf type="roughplastic">"#, "beckmann"],
+            at: r#"<float name="alpha_u""#,
+            names: &[r#"<bsdf type="roughplastic">"#, "`alpha_u`"],
         },
         Case {
             name: "an unknown shape plugin",

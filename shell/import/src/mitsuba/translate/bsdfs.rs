@@ -68,22 +68,26 @@ fn ior(p: &mut Props, name: &str, default: &str) -> Result<f64, ImportError> {
     }
 }
 
-/// `roughplastic` → rtk's `roughplastic` (the same model and tables).
+/// `roughplastic` → rtk's `roughplastic` (the same model and tables, GGX
+/// or Beckmann).
 /// `None` when lenient dropped it.
 pub(super) fn roughplastic(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
     let mut p = Props::new(b);
-    // Mitsuba's microfacet default is Beckmann; rtk's shader is GGX.
-    let dist = p.string("distribution", "beckmann")?;
-    if !dist.eq_ignore_ascii_case("ggx") {
-        tx.refuse_plugin(
-            b,
-            &format!("distribution `{dist}`: rtk's roughplastic is GGX only (Mitsuba's default is beckmann)"),
-        )?;
-        return Ok(None);
+    // Mitsuba's default is Beckmann (rtk's is GGX: always written).
+    let dist = p.string("distribution", "beckmann")?.to_ascii_lowercase();
+    if dist != "ggx" && dist != "beckmann" {
+        return Err(ImportError::invalid(
+            &b.loc,
+            format!(
+                "{}: distribution `{dist}`: Mitsuba's are ggx and beckmann",
+                b.what()
+            ),
+        ));
     }
     // Sampling only: the image's mean is the same either way.
     p.ignore(&["sample_visible"]);
     let mut k = def("roughplastic");
+    k.push(("distribution".into(), T::String(dist)));
     k.push(("alpha".into(), T::Float(p.float("alpha", 0.1)?)));
     if !coat(tx, b, &mut p, &mut k)? {
         return Ok(None);
