@@ -2,7 +2,8 @@
 #![forbid(unsafe_code)]
 
 use rtk_kernel::glam::Vec3;
-use rtk_kernel::sdk::microfacet::Ggx;
+use rtk_kernel::sdk::microfacet::Normals;
+use rtk_kernel::sdk::shading::fresnel_conductor;
 use rtk_kernel::serde::Deserialize;
 use rtk_kernel::*;
 
@@ -13,6 +14,16 @@ struct Params {
     alpha: f32,
     #[serde(default = "white")]
     reflectance: [f32; 3],
+    #[serde(default = "ggx")]
+    distribution: String,
+    #[serde(default)]
+    masking: Option<String>,
+    #[serde(default)]
+    eta: Option<[f32; 3]>,
+    #[serde(default)]
+    k: Option<[f32; 3]>,
+    #[serde(default = "yes")]
+    two_sided: bool,
 }
 
 fn rough() -> f32 {
@@ -20,6 +31,12 @@ fn rough() -> f32 {
 }
 fn white() -> [f32; 3] {
     [1.0; 3]
+}
+fn ggx() -> String {
+    "ggx".into()
+}
+fn yes() -> bool {
+    true
 }
 
 /// Range of `alpha`: below 1e-3 the lobe is a mirror that f32 densities
@@ -30,9 +47,23 @@ const ALPHA_MAX: f32 = 1.0;
 /// The one lobe.
 const LOBE: u32 = lobe::GLOSSY | lobe::REFLECTION;
 
+/// How shadowing and masking combine.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Masking {
+    /// Height-correlated: 1 / (1 + Λ(wo) + Λ(wi)) (Heitz 2014; GGX).
+    Correlated,
+    /// G1(wo) G1(wi), Mitsuba's.
+    Separable,
+}
+
 struct RoughConductor {
-    ggx: Ggx,
+    normals: Normals,
+    masking: Masking,
     r: Color,
+    /// The complex index per channel, when the Fresnel term is computed.
+    index: Option<([f32; 3], [f32; 3])>,
+    /// Both faces reflect; false: Mitsuba's one-sided rule.
+    two_sided: bool,
 }
 
 impl Plugin for RoughConductor {
@@ -45,14 +76,50 @@ impl Plugin for RoughConductor {
                 format!("must be a number in [0.001, 1], got {}", p.alpha),
             ));
         }
+        let normals = Normals::named(&p.distribution, p.alpha).ok_or_else(|| {
+            PluginError::key(
+                "distribution",
+                format!("`{}`: use \"ggx\" or \"beckmann\"", p.distribution),
+            )
+        })?;
+        let masking = match (p.masking.as_deref(), normals) {
+            (None | Some("correlated"), Normals::Ggx(_)) => Masking::Correlated,
+            (None | Some("separable"), _) => Masking::Separable,
+            (Some("correlated"), Normals::Beckmann(_)) => {
+                return Err(PluginError::key(
+                    "masking",
+                    "Beckmann normals take \"separable\" masking",
+                ))
+            }
+            (Some(o), _) => {
+                return Err(PluginError::key(
+                    "masking",
+                    format!("`{o}`: use \"correlated\" or \"separable\""),
+                ))
+            }
+        };
+        let index = match (p.eta, p.k) {
+            (Some(eta), Some(k)) => {
+                params::color("eta", eta)?;
+                params::color("k", k)?;
+                Some((eta, k))
+            }
+            (None, None) => None,
+            (Some(_), None) => return Err(PluginError::key("k", "`eta` needs `k` beside it")),
+            (None, Some(_)) => return Err(PluginError::key("eta", "`k` needs `eta` beside it")),
+        };
         Ok(RoughConductor {
-            ggx: Ggx { alpha: p.alpha },
+            normals,
+            masking,
             r: params::reflectance("reflectance", p.reflectance)?,
+            index,
+            two_sided: p.two_sided,
         })
     }
 }
 
-/// Orthonormal frame about the shading normal turned towards `wo`.
+/// Orthonormal frame about the shading normal (turned towards `wo` when
+/// two-sided).
 struct Frame {
     t: Vec3,
     b: Vec3,
@@ -60,9 +127,13 @@ struct Frame {
 }
 
 impl Frame {
-    fn new(g: &LocalGeom, wo: Vec3) -> Frame {
+    fn new(g: &LocalGeom, wo: Vec3, two_sided: bool) -> Frame {
         let ns = g.ns.v();
-        let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
+        let n = if two_sided && ns.dot(wo) < 0.0 {
+            -ns
+        } else {
+            ns
+        };
         let (t, b) = n.any_orthonormal_pair();
         Frame { t, b, n }
     }
@@ -76,14 +147,17 @@ impl Frame {
     }
 }
 
-/// `wo` and `wi` leave on the same side of the geometric surface.
-#[inline]
-fn same_geometric_side(g: &LocalGeom, wo: Vec3, wi: Vec3) -> bool {
-    let ng = g.ng.v();
-    ng.dot(wo) * ng.dot(wi) > 0.0
-}
-
 impl RoughConductor {
+    /// Does this pair leave where the lobe lives? Two-sided (rtk's own
+    /// rule): on one side of the geometric surface, so a tilted shading
+    /// normal cannot send light through; one-sided (Mitsuba's): both above
+    /// the shading normal, which [`Self::half`] checks.
+    #[inline]
+    fn admits(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> bool {
+        let ng = g.ng.v();
+        !self.two_sided || ng.dot(wo) * ng.dot(wi) > 0.0
+    }
+
     /// The half vector of two local directions above the surface, if any.
     #[inline]
     fn half(lo: Vec3, li: Vec3) -> Option<Vec3> {
@@ -94,22 +168,53 @@ impl RoughConductor {
         (m.z > 0.0).then_some(m)
     }
 
-    /// f(wo, wi) / R, local.
-    fn brdf(&self, lo: Vec3, li: Vec3) -> f32 {
-        let Some(m) = Self::half(lo, li) else {
-            return 0.0;
-        };
-        let g2 = 1.0 / (1.0 + self.ggx.lambda(lo) + self.ggx.lambda(li));
-        let f = self.ggx.d(m) * g2 / (4.0 * lo.z * li.z);
-        if f.is_finite() {
-            f
-        } else {
-            0.0
+    /// Shadowing-masking of the pair about `m`.
+    fn g2(&self, lo: Vec3, li: Vec3, m: Vec3) -> f32 {
+        match (self.masking, self.normals) {
+            (Masking::Correlated, Normals::Ggx(g)) => 1.0 / (1.0 + g.lambda(lo) + g.lambda(li)),
+            _ => self.normals.g1(lo, m) * self.normals.g1(li, m),
         }
     }
 
-    /// Density of [`Self::sample_local`]'s `li`: D_wo(m) / (4 wo·m) =
-    /// G1(wo) D(m) / (4 cos θo).
+    /// f(wo, wi), local: the Fresnel colour times D G / (4 cos θo cos θi).
+    fn brdf(&self, lo: Vec3, li: Vec3) -> Color {
+        let Some(m) = Self::half(lo, li) else {
+            return Color::BLACK;
+        };
+        let f = self.normals.d(m) * self.g2(lo, li, m) / (4.0 * lo.z * li.z);
+        if !(f.is_finite() && f > 0.0) {
+            return Color::BLACK;
+        }
+        self.fresnel(lo.dot(m)).scale(f)
+    }
+
+    /// The reflectance at cosine `c` to the facet: constant, or Mitsuba's
+    /// conductor Fresnel term per channel.
+    fn fresnel(&self, c: f32) -> Color {
+        match &self.index {
+            None => self.r,
+            Some((eta, k)) => {
+                let f = [0, 1, 2].map(|i| fresnel_conductor(c.min(1.0), eta[i], k[i]));
+                self.r.times(Color::from_array(f))
+            }
+        }
+    }
+
+    /// f·cos θi / pdf over the Fresnel colour, for a sample of density
+    /// `pdf` about `m`. With GGX's visible normals the quotient is known in
+    /// closed form (at most 1, exactly: G2 / G1(wo)); otherwise divided out.
+    fn weight(&self, lo: Vec3, li: Vec3, m: Vec3, pdf: f32) -> f32 {
+        match (self.masking, self.normals) {
+            (Masking::Correlated, Normals::Ggx(g)) => {
+                let (l_o, l_i) = (g.lambda(lo), g.lambda(li));
+                (1.0 + l_o) / (1.0 + l_o + l_i)
+            }
+            (Masking::Separable, Normals::Ggx(g)) => g.g1(li, m),
+            _ => self.normals.d(m) * self.g2(lo, li, m) / (4.0 * lo.z) / pdf,
+        }
+    }
+
+    /// Density of `sample`'s `li`: the normals' density over 4 wo·m.
     fn density(&self, lo: Vec3, li: Vec3) -> f32 {
         let Some(m) = Self::half(lo, li) else {
             return 0.0;
@@ -117,8 +222,7 @@ impl RoughConductor {
         if !(lo.dot(m) > 0.0) {
             return 0.0;
         }
-        let g1 = 1.0 / (1.0 + self.ggx.lambda(lo));
-        let p = g1 * self.ggx.d(m) / (4.0 * lo.z);
+        let p = self.normals.pdf(lo, m) / (4.0 * lo.dot(m));
         if p.is_finite() {
             p
         } else {
@@ -133,11 +237,11 @@ impl Shader for RoughConductor {
     }
 
     fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
-        if !same_geometric_side(g, wo, wi) {
+        if !self.admits(g, wo, wi) {
             return Color::BLACK;
         }
-        let fr = Frame::new(g, wo);
-        self.r.scale(self.brdf(fr.local(wo), fr.local(wi)))
+        let fr = Frame::new(g, wo, self.two_sided);
+        self.brdf(fr.local(wo), fr.local(wi))
     }
 
     fn sample(
@@ -151,18 +255,18 @@ impl Shader for RoughConductor {
         if lobes & LOBE != LOBE || self.r.is_black() {
             return None;
         }
-        let fr = Frame::new(g, wo);
+        let fr = Frame::new(g, wo, self.two_sided);
         let lo = fr.local(wo);
         if !(lo.z > 0.0) {
             return None;
         }
-        let m = self.ggx.visible_normal(lo, u);
+        let m = self.normals.sample(lo, u);
         let li = 2.0 * lo.dot(m) * m - lo;
         if !(li.z > 0.0) {
             return None; // reflected into the surface: absorbed
         }
         let wi = fr.world(li).normalize();
-        if !same_geometric_side(g, wo, wi) {
+        if !self.admits(g, wo, wi) {
             return None;
         }
         // Density and weight from wi as returned, so they agree with
@@ -172,15 +276,14 @@ impl Shader for RoughConductor {
         if !(pdf > 0.0) {
             return None;
         }
-        let (l_o, l_i) = (self.ggx.lambda(lo), self.ggx.lambda(li));
-        // f·cos/pdf = R · G2 / G1(wo).
-        let w = (1.0 + l_o) / (1.0 + l_o + l_i);
-        if !w.is_finite() {
+        let m = Self::half(lo, li)?;
+        let weight = self.fresnel(lo.dot(m)).scale(self.weight(lo, li, m, pdf));
+        if !weight.is_finite() || weight.is_black() {
             return None;
         }
         Some(BsdfSample {
             wi: wi.into(),
-            weight: self.r.scale(w),
+            weight,
             pdf,
             lobe: LOBE,
             eta: 1.0,
@@ -195,10 +298,10 @@ impl Shader for RoughConductor {
         wi: Vec3,
         lobes: u32,
     ) -> Option<f32> {
-        if lobes & LOBE != LOBE || self.r.is_black() || !same_geometric_side(g, wo, wi) {
+        if lobes & LOBE != LOBE || self.r.is_black() || !self.admits(g, wo, wi) {
             return Some(0.0);
         }
-        let fr = Frame::new(g, wo);
+        let fr = Frame::new(g, wo, self.two_sided);
         Some(self.density(fr.local(wo), fr.local(wi)))
     }
 }
@@ -225,15 +328,88 @@ mod tests {
         }
     }
 
+    fn params(alpha: f32, reflectance: [f32; 3]) -> Params {
+        Params {
+            alpha,
+            reflectance,
+            distribution: "ggx".into(),
+            masking: None,
+            eta: None,
+            k: None,
+            two_sided: true,
+        }
+    }
+
+    /// Mitsuba's `roughconductor` (one-sided, separable masking, the
+    /// conductor Fresnel term): `eval` (f·cos of the light) from Mitsuba
+    /// 3.9.1 `scalar_rgb`, eta (0.2, 0.789, 1.5), k (3.9, 6.15, 2.0),
+    /// (distribution, α, [θ, φ of the viewer, θ, φ of the light]).
+    #[test]
+    fn mitsuba_mode_is_mitsubas() {
+        #[rustfmt::skip]
+        #[allow(clippy::excessive_precision)]
+        const MITSUBA: &[(&str, f32, [f32; 4], [f32; 3])] = &[
+        ("beckmann", 0.05, [0.0, 0.0, 3.0, 180.0], [2.3064392e+01, 2.2364565e+01, 1.0045971e+01]),
+        ("beckmann", 0.05, [30.0, 0.0, 31.0, 180.0], [3.3930714e+01, 3.2890018e+01, 1.4818993e+01]),
+        ("beckmann", 0.05, [60.0, 0.0, 55.0, 170.0], [1.6517188e-02, 1.5914980e-02, 7.5679985e-03]),
+        ("beckmann", 0.05, [75.0, 0.0, 70.0, 180.0], [5.4248577e+01, 5.1248966e+01, 2.9050606e+01]),
+        ("beckmann", 0.05, [20.0, 0.0, 40.0, 180.0], [1.3608570e-04, 1.3191484e-04, 5.9423513e-05]),
+        ("beckmann", 0.3, [0.0, 0.0, 3.0, 180.0], [8.3646798e-01, 8.1108761e-01, 3.6433360e-01]),
+        ("beckmann", 0.3, [30.0, 0.0, 31.0, 180.0], [9.7085196e-01, 9.4107479e-01, 4.2401254e-01]),
+        ("beckmann", 0.3, [60.0, 0.0, 55.0, 170.0], [1.3872765e+00, 1.3366972e+00, 6.3563526e-01]),
+        ("beckmann", 0.3, [75.0, 0.0, 70.0, 180.0], [3.0212851e+00, 2.8542268e+00, 1.6179256e+00]),
+        ("beckmann", 0.3, [20.0, 0.0, 40.0, 180.0], [6.7386740e-01, 6.5321416e-01, 2.9425257e-01]),
+        ("ggx", 0.2, [0.0, 0.0, 3.0, 180.0], [1.8330110e+00, 1.7773932e+00, 7.9838985e-01]),
+        ("ggx", 0.2, [30.0, 0.0, 31.0, 180.0], [2.1629720e+00, 2.0966311e+00, 9.4466233e-01]),
+        ("ggx", 0.2, [60.0, 0.0, 55.0, 170.0], [1.6284422e+00, 1.5690700e+00, 7.4613470e-01]),
+        ("ggx", 0.2, [75.0, 0.0, 70.0, 180.0], [5.5036988e+00, 5.1993785e+00, 2.9472809e+00]),
+        ("ggx", 0.2, [20.0, 0.0, 40.0, 180.0], [6.7247391e-01, 6.5186340e-01, 2.9364410e-01]),
+        ];
+        let g = geom(Vec3::Z);
+        let mut ctx = TraceCtx::new(0, 1, 0);
+        let mut rng = RngState::seeded(9);
+        for &(dist, alpha, [to, po, ti, pi], want) in MITSUBA {
+            let m = RoughConductor::create(
+                Params {
+                    distribution: dist.into(),
+                    masking: Some("separable".into()),
+                    eta: Some([0.2, 0.789, 1.5]),
+                    k: Some([3.9, 6.15, 2.0]),
+                    two_sided: false,
+                    ..params(alpha, [1.0; 3])
+                },
+                &env(),
+            )
+            .unwrap();
+            let polar = |t: f32, p: f32| {
+                let (t, p) = (t.to_radians(), p.to_radians());
+                Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+            };
+            let (wo, wi) = (polar(to, po), polar(ti, pi));
+            let got = m.eval(&mut ctx, &g, wo, wi).scale(wi.z).to_array();
+            for (x, y) in got.iter().zip(want) {
+                assert!(
+                    (x - y).abs() <= 2e-4 * y + 1e-9,
+                    "{dist} {alpha} {to} {po} {ti} {pi}: {got:?} vs Mitsuba's {want:?}"
+                );
+            }
+            // Samples agree with eval and pdf; nothing from behind.
+            for _ in 0..200 {
+                let u = [rng.next_f32(), rng.next_f32()];
+                if let Some(s) = m.sample(&mut ctx, &g, wo, u, lobe::ALL) {
+                    let p = m.pdf(&mut ctx, &g, wo, s.wi.v(), lobe::ALL).unwrap();
+                    assert!((p - s.pdf).abs() <= 1e-4 * p);
+                    let w = m.eval(&mut ctx, &g, wo, s.wi.v()).scale(s.wi.v().z / p);
+                    assert!((w.g - s.weight.g).abs() <= 1e-3 * w.g.max(1e-3));
+                }
+            }
+            let below = Vec3::new(wo.x, wo.y, -wo.z.max(0.1));
+            assert!(m.eval(&mut ctx, &g, below, wi).is_black());
+        }
+    }
+
     fn metal(alpha: f32, r: [f32; 3]) -> RoughConductor {
-        RoughConductor::create(
-            Params {
-                alpha,
-                reflectance: r,
-            },
-            &env(),
-        )
-        .unwrap()
+        RoughConductor::create(params(alpha, r), &env()).unwrap()
     }
 
     fn geom(n: Vec3) -> LocalGeom {
@@ -479,26 +655,14 @@ mod tests {
     #[test]
     fn parameters_are_checked() {
         for alpha in [0.0, 1e-4, 1.5, f32::NAN, -0.1] {
-            let e = RoughConductor::create(
-                Params {
-                    alpha,
-                    reflectance: [1.0; 3],
-                },
-                &env(),
-            )
-            .err()
-            .unwrap();
+            let e = RoughConductor::create(params(alpha, [1.0; 3]), &env())
+                .err()
+                .unwrap();
             assert_eq!(e.key, "alpha");
         }
-        let e = RoughConductor::create(
-            Params {
-                alpha: 0.2,
-                reflectance: [1.0, -0.1, 1.0],
-            },
-            &env(),
-        )
-        .err()
-        .unwrap();
+        let e = RoughConductor::create(params(0.2, [1.0, -0.1, 1.0]), &env())
+            .err()
+            .unwrap();
         assert_eq!(e.key, "reflectance");
         let p: Params = parse_params("{}").unwrap();
         assert_eq!((p.alpha, p.reflectance), (0.1, [1.0; 3]));

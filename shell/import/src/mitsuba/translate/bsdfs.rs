@@ -272,3 +272,43 @@ fn material_spectrum(tx: &Tx, b: &Obj, material: &str, part: &str) -> Result<T, 
         )),
     }
 }
+
+/// `roughconductor` → rtk's `roughconductor` in Mitsuba's form: its
+/// distribution (Beckmann by default), separable masking, the complex
+/// index, one-sided. Anisotropic roughness is refused. `None` when
+/// lenient dropped it.
+pub(super) fn roughconductor(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let mut p = Props::new(b);
+    let dist = p.string("distribution", "beckmann")?.to_ascii_lowercase();
+    if dist != "ggx" && dist != "beckmann" {
+        return Err(ImportError::invalid(
+            &b.loc,
+            format!(
+                "{}: distribution `{dist}`: Mitsuba's are ggx and beckmann",
+                b.what()
+            ),
+        ));
+    }
+    p.ignore(&["sample_visible"]);
+    let mut k = def("roughconductor");
+    k.push(("distribution".into(), T::String(dist)));
+    k.push(("masking".into(), T::String("separable".into())));
+    k.push(("alpha".into(), T::Float(p.float("alpha", 0.1)?)));
+    let Some(index) = complex_index(tx, b, &mut p)? else {
+        return Ok(None);
+    };
+    if let Some((eta, kk)) = index {
+        k.push(("eta".into(), eta));
+        k.push(("k".into(), kk));
+    }
+    if let Some(s) = p.color(tx, "specular_reflectance", Role::Reflectance)? {
+        if !matches!(s, T::Array(_)) {
+            tx.refuse_plugin(b, "a textured specular_reflectance is not translated")?;
+            return Ok(None);
+        }
+        k.push(("reflectance".into(), s));
+    }
+    k.push(("two_sided".into(), T::Boolean(false)));
+    p.finish(tx)?;
+    Ok(Some(k))
+}
