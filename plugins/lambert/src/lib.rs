@@ -3,7 +3,7 @@
 
 mod bump;
 #[cfg(test)]
-mod bump_tests;
+mod tests;
 
 use rtk_kernel::glam::Vec3;
 use rtk_kernel::sdk::shading::{cosine_hemisphere, cosine_lobe_sample, cosine_pdf, same_side};
@@ -25,6 +25,8 @@ struct Params {
     bump_map: Option<TextureParam>,
     #[serde(default = "one")]
     bump_scale: f32,
+    #[serde(default)]
+    opacity: Option<TextureParam>,
 }
 
 fn one() -> f32 {
@@ -49,6 +51,8 @@ struct Lambert {
     two_sided: bool,
     /// A height field over uv that tilts the shading normal.
     bump: Option<bump::Bump>,
+    /// Where below 1, light passes through (a cut-out leaf).
+    opacity: Option<Texture>,
 }
 
 impl Plugin for Lambert {
@@ -64,6 +68,10 @@ impl Plugin for Lambert {
                     t.build("bump_map", env, params::color)?,
                     p.bump_scale,
                 )?),
+                None => None,
+            },
+            opacity: match p.opacity {
+                Some(t) => Some(t.reflectance("opacity", env)?),
                 None => None,
             },
         })
@@ -98,17 +106,9 @@ impl Lambert {
     }
 }
 
-impl Shader for Lambert {
-    fn lobes(&self) -> u32 {
-        let emits = if self.le.is_black() {
-            0
-        } else {
-            lobe::EMISSION
-        };
-        lobe::DIFFUSE | lobe::REFLECTION | emits
-    }
-
-    fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
+/// The diffuse lobe itself (bumped or not), before any opacity.
+impl Lambert {
+    fn lobe_eval(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
         if let Some(t) = self.tilted(g, wo) {
             // The lobe about n′, f·cos expressed against the untilted
             // normal the integrator's cosine uses.
@@ -126,17 +126,7 @@ impl Shader for Lambert {
         }
     }
 
-    fn sample(
-        &self,
-        _ctx: &mut TraceCtx,
-        g: &LocalGeom,
-        wo: Vec3,
-        u: [f32; 2],
-        lobes: u32,
-    ) -> Option<BsdfSample> {
-        if lobes & lobe::DIFFUSE == 0 || lobes & lobe::REFLECTION == 0 {
-            return None;
-        }
+    fn lobe_sample(&self, g: &LocalGeom, wo: Vec3, u: [f32; 2]) -> Option<BsdfSample> {
         if let Some(t) = self.tilted(g, wo) {
             let wi = cosine_hemisphere(t.n, u);
             let pdf = wi.dot(t.n) * FRAC_1_PI;
@@ -147,14 +137,104 @@ impl Shader for Lambert {
                 wi: wi.into(),
                 weight: self.albedo.at(g).scale(t.shadowing(wi)),
                 pdf,
-                lobe: lobe::DIFFUSE | lobe::REFLECTION,
+                lobe: DIFFUSE,
                 eta: 1.0,
             });
         }
         if self.behind(g, wo) {
             return None;
         }
-        cosine_lobe_sample(g, wo, u, lobe::DIFFUSE | lobe::REFLECTION, |_| self.f(g))
+        cosine_lobe_sample(g, wo, u, DIFFUSE, |_| self.f(g))
+    }
+
+    fn lobe_pdf(&self, g: &LocalGeom, wo: Vec3, wi: Vec3) -> f32 {
+        if let Some(t) = self.tilted(g, wo) {
+            return if t.admits(wo, wi) {
+                wi.dot(t.n) * FRAC_1_PI
+            } else {
+                0.0
+            };
+        }
+        if !self.behind(g, wo) {
+            cosine_pdf(g, wo, wi)
+        } else {
+            0.0
+        }
+    }
+
+    /// The surface's opacity at the hit (1 without an opacity map), and
+    /// whether the pass-through and the diffuse lobes are asked for.
+    fn opacity(&self, g: &LocalGeom, lobes: u32) -> (f32, bool, bool) {
+        let diffuse = lobes & DIFFUSE == DIFFUSE;
+        let Some(o) = &self.opacity else {
+            return (1.0, false, diffuse);
+        };
+        let null = lobes & NULL == NULL;
+        let a = match (null, diffuse) {
+            (true, true) => {
+                let c = o.at(g).to_array();
+                (0..3)
+                    .map(|k| c[k] * LUMINANCE[k])
+                    .sum::<f32>()
+                    .clamp(0.0, 1.0)
+            }
+            (true, false) => 0.0,
+            _ => 1.0,
+        };
+        (a, null, diffuse)
+    }
+}
+
+/// The diffuse lobe.
+const DIFFUSE: u32 = lobe::DIFFUSE | lobe::REFLECTION;
+/// Passing through where the opacity map is below 1: straight on, as if
+/// the surface were not there (Mitsuba's `mask`, its null lobe).
+const NULL: u32 = lobe::SPECULAR | lobe::TRANSMISSION;
+/// Mitsuba's luminance weights: an opacity map's value is its luminance.
+const LUMINANCE: [f32; 3] = [0.212671, 0.715160, 0.072169];
+
+impl Shader for Lambert {
+    fn lobes(&self) -> u32 {
+        let emits = if self.le.is_black() {
+            0
+        } else {
+            lobe::EMISSION
+        };
+        let through = if self.opacity.is_some() { NULL } else { 0 };
+        DIFFUSE | emits | through
+    }
+
+    fn eval(&self, _ctx: &mut TraceCtx, g: &LocalGeom, wo: Vec3, wi: Vec3) -> Color {
+        let (a, _, _) = self.opacity(g, lobe::ALL);
+        self.lobe_eval(g, wo, wi).scale(a)
+    }
+
+    /// With an opacity map: through with probability 1 − α (weight 1),
+    /// else the diffuse lobe with `u[0]` stretched back to [0, 1).
+    fn sample(
+        &self,
+        _ctx: &mut TraceCtx,
+        g: &LocalGeom,
+        wo: Vec3,
+        u: [f32; 2],
+        lobes: u32,
+    ) -> Option<BsdfSample> {
+        let (a, null, diffuse) = self.opacity(g, lobes);
+        if !(u[0] < a) {
+            return null.then_some(BsdfSample {
+                wi: (-wo).into(),
+                weight: Color::splat(1.0),
+                pdf: 1.0 - a,
+                lobe: NULL,
+                eta: 1.0,
+            });
+        }
+        if !diffuse {
+            return None;
+        }
+        let mut s = self.lobe_sample(g, wo, [(u[0] / a).min(1.0 - f32::EPSILON), u[1]])?;
+        s.pdf *= a;
+        Some(s)
     }
 
     fn pdf(
@@ -165,19 +245,9 @@ impl Shader for Lambert {
         wi: Vec3,
         lobes: u32,
     ) -> Option<f32> {
-        let ours = lobe::DIFFUSE | lobe::REFLECTION;
-        if lobes & ours != ours {
-            return Some(0.0);
-        }
-        if let Some(t) = self.tilted(g, wo) {
-            return Some(if t.admits(wo, wi) {
-                wi.dot(t.n) * FRAC_1_PI
-            } else {
-                0.0
-            });
-        }
-        Some(if !self.behind(g, wo) {
-            cosine_pdf(g, wo, wi)
+        let (a, _, diffuse) = self.opacity(g, lobes);
+        Some(if diffuse {
+            a * self.lobe_pdf(g, wo, wi)
         } else {
             0.0
         })

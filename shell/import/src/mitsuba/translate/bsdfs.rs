@@ -312,3 +312,39 @@ pub(super) fn roughconductor(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, Impor
     p.finish(tx)?;
     Ok(Some(k))
 }
+
+/// `mask` around a `diffuse` or a `twosided` `diffuse` → `lambert` with
+/// `opacity` (Mitsuba's default opacity is 0.5). `None` when lenient
+/// dropped it.
+pub(super) fn mask(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let nested: Vec<_> = b.children_tagged("bsdf").collect();
+    let inner = match nested[..] {
+        [one] if one.ty == "diffuse" => Some((one, false)),
+        [one] if one.ty == "twosided" => {
+            match one.children_tagged("bsdf").collect::<Vec<_>>()[..] {
+                [d] if d.ty == "diffuse" => {
+                    Props::new(one).finish(tx)?;
+                    Some((d, true))
+                }
+                _ => None,
+            }
+        }
+        _ => None,
+    };
+    let Some((diffuse, two_sided)) = inner else {
+        tx.refuse_plugin(
+            b,
+            "rtk translates a mask around one diffuse or twosided(diffuse) BSDF",
+        )?;
+        return Ok(None);
+    };
+    let mut p = Props::new(b);
+    let opacity = p
+        .color(tx, "opacity", Role::Reflectance)?
+        .unwrap_or(vec3([0.5; 3]));
+    p.finish(tx)?;
+    let albedo = super::scene_objects::diffuse_albedo(tx, diffuse)?;
+    let mut k = super::scene_objects::diffuse_keys(albedo, two_sided);
+    k.push(("opacity".into(), opacity));
+    Ok(Some(k))
+}

@@ -1,5 +1,5 @@
 //! The bumped lambert against Mitsuba 3's `bumpmap` around a `diffuse`,
-//! and against itself.
+//! the opacity map against Mitsuba's `mask`, and both against themselves.
 
 use super::*;
 
@@ -164,4 +164,58 @@ fn flat_or_tangentless_is_plain_lambert() {
     // Flat: no tilt, and the shadowing term is 1 (α = 0).
     let f = flat.eval(&mut ctx, &g, wo, wi).r;
     assert!((f - 0.5 * std::f32::consts::FRAC_1_PI).abs() < 1e-6, "{f}");
+}
+
+/// An opacity map (a constant 0.3 here, its luminance): `eval` and `pdf`
+/// are 0.3 of the diffuse lobe's, `sample` passes straight through with
+/// probability 0.7 (weight 1, SPECULAR | TRANSMISSION), and its diffuse
+/// samples agree with `eval` and `pdf` — Mitsuba's `mask`.
+#[test]
+fn opacity_passes_light_through_as_mitsubas_mask() {
+    let mk = |json: &str| Lambert::create(parse_params(json).unwrap(), &env(".")).unwrap();
+    let masked =
+        mk(r#"{"albedo": [0.5, 0.5, 0.5], "two_sided": false, "opacity": [0.3, 0.3, 0.3]}"#);
+    let plain = mk(r#"{"albedo": [0.5, 0.5, 0.5], "two_sided": false}"#);
+    let g = hit([0.3, 0.4]);
+    let mut ctx = TraceCtx::new(0, 1, 0);
+    let (wo, wi) = (polar(30.0, 0.0), polar(50.0, 120.0));
+    let f = masked.eval(&mut ctx, &g, wo, wi).r;
+    assert!((f - 0.3 * plain.eval(&mut ctx, &g, wo, wi).r).abs() < 1e-7);
+    let p = masked.pdf(&mut ctx, &g, wo, wi, lobe::ALL).unwrap();
+    assert!((p - 0.3 * plain.pdf(&mut ctx, &g, wo, wi, lobe::ALL).unwrap()).abs() < 1e-7);
+    assert_eq!(masked.lobes() & NULL, NULL);
+    assert_eq!(plain.lobes() & NULL, 0);
+    let mut rng = RngState::seeded(11);
+    let (mut through, n) = (0, 100_000);
+    for _ in 0..n {
+        let u = [rng.next_f32(), rng.next_f32()];
+        let s = masked.sample(&mut ctx, &g, wo, u, lobe::ALL).unwrap();
+        if s.lobe == NULL {
+            through += 1;
+            assert_eq!(s.wi.v(), -wo);
+            assert!((s.pdf - 0.7).abs() < 1e-6 && s.weight.r == 1.0);
+        } else {
+            let p = masked.pdf(&mut ctx, &g, wo, s.wi.v(), lobe::ALL).unwrap();
+            assert!((p - s.pdf).abs() <= 1e-5 * p);
+            assert!((s.weight.r - 0.5).abs() < 1e-5, "{:?}", s.weight);
+        }
+    }
+    let share = through as f64 / n as f64;
+    assert!((share - 0.7).abs() < 0.005, "{share}");
+    // Asked for one lobe: only that one.
+    let s = masked.sample(&mut ctx, &g, wo, [0.1, 0.5], NULL).unwrap();
+    assert_eq!((s.lobe, s.pdf), (NULL, 1.0));
+    let s = masked
+        .sample(&mut ctx, &g, wo, [0.9, 0.5], DIFFUSE)
+        .unwrap();
+    assert_eq!(s.lobe, DIFFUSE);
+    // One-sided from behind: no reflection, but still passes through.
+    let behind = polar(150.0, 0.0);
+    assert!(masked
+        .sample(&mut ctx, &g, behind, [0.1, 0.5], lobe::ALL)
+        .is_none());
+    let s = masked
+        .sample(&mut ctx, &g, behind, [0.9, 0.5], lobe::ALL)
+        .unwrap();
+    assert_eq!(s.lobe, NULL);
 }
