@@ -15,6 +15,8 @@ struct Params {
     reflectance: [f32; 3],
     #[serde(default = "white")]
     transmittance: [f32; 3],
+    #[serde(default)]
+    scale_radiance: bool,
 }
 
 fn glass() -> f32 {
@@ -28,6 +30,8 @@ struct Dielectric {
     eta: f32,
     kr: Color,
     kt: Color,
+    /// Scale transmitted radiance by 1/η² (Mitsuba's and pbrt's convention).
+    scale_radiance: bool,
 }
 
 const REFLECT: u32 = lobe::SPECULAR | lobe::REFLECTION;
@@ -47,6 +51,7 @@ impl Plugin for Dielectric {
             eta: p.eta,
             kr: params::reflectance("reflectance", p.reflectance)?,
             kt: params::reflectance("transmittance", p.transmittance)?,
+            scale_radiance: p.scale_radiance,
         })
     }
 }
@@ -82,6 +87,19 @@ impl Dielectric {
             1.0
         };
         Interface { n, f, t, eta }
+    }
+}
+
+impl Dielectric {
+    /// The radiance factor of a crossing with relative index `eta`: 1, or
+    /// 1/η² with `scale_radiance` (the solid angle compressed).
+    #[inline]
+    fn crossing(&self, eta: f32) -> f32 {
+        if self.scale_radiance {
+            1.0 / (eta * eta)
+        } else {
+            1.0
+        }
     }
 }
 
@@ -127,11 +145,16 @@ impl Shader for Dielectric {
                 if u[0] < s.f {
                     delta(reflected(), self.kr, REFLECT, 1.0)
                 } else {
-                    delta(s.t?, self.kt, TRANSMIT, s.eta)
+                    delta(s.t?, self.kt.scale(self.crossing(s.eta)), TRANSMIT, s.eta)
                 }
             }
             (true, false) => delta(reflected(), self.kr.scale(s.f), REFLECT, 1.0),
-            _ => delta(s.t?, self.kt.scale(1.0 - s.f), TRANSMIT, s.eta),
+            _ => delta(
+                s.t?,
+                self.kt.scale((1.0 - s.f) * self.crossing(s.eta)),
+                TRANSMIT,
+                s.eta,
+            ),
         }
     }
 
@@ -175,6 +198,7 @@ mod tests {
                 eta,
                 reflectance: [1.0; 3],
                 transmittance: [1.0; 3],
+                scale_radiance: false,
             },
             &env(),
         )
@@ -257,6 +281,7 @@ mod tests {
                 eta: 1.5,
                 reflectance: [0.5, 0.5, 0.5],
                 transmittance: [0.25, 0.5, 1.0],
+                scale_radiance: false,
             },
             &env(),
         )
@@ -334,6 +359,7 @@ mod tests {
                     eta,
                     reflectance: [1.0; 3],
                     transmittance: [1.0; 3],
+                    scale_radiance: false,
                 },
                 &env(),
             )
@@ -346,6 +372,7 @@ mod tests {
                 eta: 1.5,
                 reflectance: [1.0; 3],
                 transmittance: [1.0, 1.1, 1.0],
+                scale_radiance: false,
             },
             &env(),
         )
@@ -357,5 +384,42 @@ mod tests {
             (p.eta, p.reflectance, p.transmittance),
             (1.5, [1.0; 3], [1.0; 3])
         );
+    }
+
+    /// `scale_radiance`: entering, the transmitted weight is (1 − F)/η²;
+    /// leaving, (1 − F)·η² — their product over a slab is the unscaled one.
+    #[test]
+    fn scale_radiance_divides_by_eta_squared() {
+        let g = LocalGeom {
+            ng: Vec3::Z.into(),
+            ns: Vec3::Z.into(),
+            ..LocalGeom::EMPTY
+        };
+        let mut ctx = TraceCtx::new(0, 1, 0);
+        let p = |scale| Params {
+            eta: 1.5,
+            reflectance: [1.0; 3],
+            transmittance: [1.0; 3],
+            scale_radiance: scale,
+        };
+        let scaled = Dielectric::create(p(true), &env()).unwrap();
+        let plain = Dielectric::create(p(false), &env()).unwrap();
+        for wo in [
+            Vec3::new(0.3, 0.0, 0.954).normalize(),
+            Vec3::new(0.2, 0.0, -0.98).normalize(),
+        ] {
+            let a = scaled
+                .sample(&mut ctx, &g, wo, [0.5, 0.5], TRANSMIT)
+                .unwrap();
+            let b = plain
+                .sample(&mut ctx, &g, wo, [0.5, 0.5], TRANSMIT)
+                .unwrap();
+            let eta = if wo.z > 0.0 { 1.5f32 } else { 1.0 / 1.5 };
+            assert!(
+                (a.weight.r - b.weight.r / (eta * eta)).abs() < 1e-6,
+                "{a:?} {b:?}"
+            );
+            assert_eq!(a.wi, b.wi);
+        }
     }
 }

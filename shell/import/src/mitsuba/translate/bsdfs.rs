@@ -348,3 +348,27 @@ pub(super) fn mask(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
     k.push(("opacity".into(), opacity));
     Ok(Some(k))
 }
+
+/// `dielectric` → rtk's `dielectric`: η = int_ior / ext_ior, Mitsuba's
+/// radiance scaling across the interface. `None` when lenient dropped it.
+pub(super) fn dielectric(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let mut p = Props::new(b);
+    let eta = ior(&mut p, "int_ior", "bk7")? / ior(&mut p, "ext_ior", "air")?;
+    let mut k = def("dielectric");
+    k.push(("eta".into(), T::Float(eta)));
+    for (theirs, ours) in [
+        ("specular_reflectance", "reflectance"),
+        ("specular_transmittance", "transmittance"),
+    ] {
+        if let Some(s) = p.color(tx, theirs, Role::Reflectance)? {
+            if !matches!(s, T::Array(_)) {
+                tx.refuse_plugin(b, &format!("a textured {theirs} is not translated"))?;
+                return Ok(None);
+            }
+            k.push((ours.into(), s));
+        }
+    }
+    k.push(("scale_radiance".into(), T::Boolean(true)));
+    p.finish(tx)?;
+    Ok(Some(k))
+}

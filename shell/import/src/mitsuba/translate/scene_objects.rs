@@ -265,11 +265,12 @@ fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
         "plastic" if !two_sided => return super::bsdfs::plastic(tx, inner),
         "conductor" if !two_sided => return super::bsdfs::conductor(tx, inner),
         "mask" if !two_sided => return super::bsdfs::mask(tx, inner),
+        "dielectric" if !two_sided => return super::bsdfs::dielectric(tx, inner),
         "roughconductor" if !two_sided => return super::bsdfs::roughconductor(tx, inner),
         _ => {
             tx.refuse_plugin(
                 inner,
-                "rtk translates the BSDFs diffuse, twosided(diffuse), plastic, roughplastic, conductor, roughconductor, bumpmap(diffuse) and mask(diffuse) so far",
+                "rtk translates the BSDFs diffuse, twosided(diffuse), plastic, roughplastic, conductor, roughconductor, dielectric, bumpmap(diffuse) and mask(diffuse) so far",
             )?;
             return Ok(None);
         }
