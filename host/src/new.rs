@@ -117,6 +117,7 @@ pub(crate) const BUILTIN_CLASSES: &[&str] = &[
     "projector",
     "raycls",
     "roughconductor",
+    "roughdielectric",
     "roughplastic",
     "slabs",
     "sphere",

@@ -197,6 +197,7 @@ fn conform_passes_every_built_in_shader() {
         "roughconductor",
         "roughplastic",
         "plastic",
+        "roughdielectric",
     ] {
         let lib = bin_dir().join(format!("librtk_{class}.so"));
         let r = conform(&lib);

@@ -372,3 +372,41 @@ pub(super) fn dielectric(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportErr
     p.finish(tx)?;
     Ok(Some(k))
 }
+
+/// `roughdielectric` → rtk's `roughdielectric`: its distribution
+/// (Beckmann by default), η = int_ior / ext_ior, Mitsuba's radiance
+/// scaling. Anisotropic roughness is refused. `None` when lenient dropped it.
+pub(super) fn roughdielectric(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let mut p = Props::new(b);
+    let dist = p.string("distribution", "beckmann")?.to_ascii_lowercase();
+    if dist != "ggx" && dist != "beckmann" {
+        return Err(ImportError::invalid(
+            &b.loc,
+            format!(
+                "{}: distribution `{dist}`: Mitsuba's are ggx and beckmann",
+                b.what()
+            ),
+        ));
+    }
+    p.ignore(&["sample_visible"]);
+    let mut k = def("roughdielectric");
+    k.push(("distribution".into(), T::String(dist)));
+    k.push(("alpha".into(), T::Float(p.float("alpha", 0.1)?)));
+    let eta = ior(&mut p, "int_ior", "bk7")? / ior(&mut p, "ext_ior", "air")?;
+    k.push(("eta".into(), T::Float(eta)));
+    for (theirs, ours) in [
+        ("specular_reflectance", "reflectance"),
+        ("specular_transmittance", "transmittance"),
+    ] {
+        if let Some(s) = p.color(tx, theirs, Role::Reflectance)? {
+            if !matches!(s, T::Array(_)) {
+                tx.refuse_plugin(b, &format!("a textured {theirs} is not translated"))?;
+                return Ok(None);
+            }
+            k.push((ours.into(), s));
+        }
+    }
+    k.push(("scale_radiance".into(), T::Boolean(true)));
+    p.finish(tx)?;
+    Ok(Some(k))
+}

@@ -266,11 +266,12 @@ fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
         "conductor" if !two_sided => return super::bsdfs::conductor(tx, inner),
         "mask" if !two_sided => return super::bsdfs::mask(tx, inner),
         "dielectric" if !two_sided => return super::bsdfs::dielectric(tx, inner),
+        "roughdielectric" if !two_sided => return super::bsdfs::roughdielectric(tx, inner),
         "roughconductor" if !two_sided => return super::bsdfs::roughconductor(tx, inner),
         _ => {
             tx.refuse_plugin(
                 inner,
-                "rtk translates the BSDFs diffuse, twosided(diffuse), plastic, roughplastic, conductor, roughconductor, dielectric, bumpmap(diffuse) and mask(diffuse) so far",
+                "rtk translates the BSDFs diffuse, twosided(diffuse), plastic, roughplastic, conductor, roughconductor, dielectric, roughdielectric, bumpmap(diffuse) and mask(diffuse) so far",
             )?;
             return Ok(None);
         }
