@@ -1,7 +1,12 @@
-//! Bump mapping: a height field over uv tilts the shading normal, as
-//! Mitsuba 3's `bumpmap` does around its `diffuse` (`src/bsdfs/bumpmap.cpp`,
-//! the shadowing of `normalmap_helpers.h`), so that `rtk import` can
-//! translate that pair exactly.
+//! Bump and normal mapping: a height field over uv, or a map of normals in
+//! the tangent frame, tilts the shading normal, as Mitsuba 3's `bumpmap`
+//! and `normalmap` do around its `diffuse` (`src/bsdfs/bumpmap.cpp`,
+//! `normalmap.cpp`, the shadowing of `normalmap_helpers.h`), so that `rtk
+//! import` can translate those pairs exactly.
+//!
+//! A normal map's texel (r, g, b) is the normal 2·(r, g, b) − 1 in the
+//! frame (s, t, n): n the shading normal, s = dp/du made perpendicular to
+//! it (Gram–Schmidt), t = n × s — Mitsuba 3.9's shading frame.
 //!
 //! With h the height (the texture's luminance) times `bump_scale`, the
 //! surface is displaced along the shading normal n: its tangents become
@@ -73,6 +78,64 @@ impl Bump {
             ns,
             alpha2: (0.125 * tan2(nz)).min(1.0),
         })
+    }
+}
+
+/// A map of tangent-space normals (read raw: 2·texel − 1).
+pub struct NormalMap {
+    map: Texture,
+}
+
+impl NormalMap {
+    pub fn new(map: Texture) -> NormalMap {
+        NormalMap { map }
+    }
+
+    /// n′ at `g` seen from `wo`; `None` without tangents or where the
+    /// frame or the texel is degenerate (the surface is then unmapped).
+    pub fn tilt(&self, g: &LocalGeom, wo: Vec3) -> Option<Tilted> {
+        if g.filled & geom_mask::TANGENTS == 0 {
+            return None;
+        }
+        let (ns, dpdu) = (g.ns.v(), g.dpdu.v());
+        let s = (dpdu - ns * ns.dot(dpdu)).normalize_or_zero();
+        if s == Vec3::ZERO || !s.is_finite() {
+            return None;
+        }
+        let t = ns.cross(s);
+        let c = self.map.at(g).to_array();
+        let mut n = Vec3::new(2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, 2.0 * c[2] - 1.0);
+        // Seen from behind: mirrored about ns (flip_invalid_normals).
+        let wl = Vec3::new(wo.dot(s), wo.dot(t), wo.dot(ns));
+        if wl.z * wl.dot(n) <= 0.0 {
+            n = Vec3::new(-n.x, -n.y, n.z);
+        }
+        let n = n.normalize_or_zero();
+        if n == Vec3::ZERO || !n.is_finite() {
+            return None;
+        }
+        Some(Tilted {
+            n: (s * n.x + t * n.y + ns * n.z).normalize_or(ns),
+            ns,
+            alpha2: (0.125 * tan2(n.z)).min(1.0),
+        })
+    }
+}
+
+/// What tilts the shading normal.
+pub enum Tilt {
+    /// A height field.
+    Bump(Bump),
+    /// A map of normals.
+    Normals(NormalMap),
+}
+
+impl Tilt {
+    pub fn tilt(&self, g: &LocalGeom, wo: Vec3) -> Option<Tilted> {
+        match self {
+            Tilt::Bump(b) => b.tilt(g, wo),
+            Tilt::Normals(m) => m.tilt(g, wo),
+        }
     }
 }
 

@@ -27,6 +27,8 @@ struct Params {
     bump_scale: f32,
     #[serde(default)]
     opacity: Option<TextureParam>,
+    #[serde(default)]
+    normal_map: Option<TextureParam>,
 }
 
 fn one() -> f32 {
@@ -49,8 +51,8 @@ struct Lambert {
     /// Reflects on both sides; false: only where both directions lie on
     /// the side the shading normal faces (Mitsuba's `diffuse`).
     two_sided: bool,
-    /// A height field over uv that tilts the shading normal.
-    bump: Option<bump::Bump>,
+    /// A height field or a normal map that tilts the shading normal.
+    bump: Option<bump::Tilt>,
     /// Where below 1, light passes through (a cut-out leaf).
     opacity: Option<Texture>,
 }
@@ -63,12 +65,21 @@ impl Plugin for Lambert {
             albedo: p.albedo.reflectance("albedo", env)?,
             le: params::color("emission", p.emission)?,
             two_sided: p.two_sided,
-            bump: match p.bump_map {
-                Some(t) => Some(bump::Bump::new(
+            bump: match (p.bump_map, p.normal_map) {
+                (Some(_), Some(_)) => {
+                    return Err(PluginError::key(
+                        "normal_map",
+                        "a surface takes a bump_map or a normal_map, not both",
+                    ))
+                }
+                (Some(t), None) => Some(bump::Tilt::Bump(bump::Bump::new(
                     t.build("bump_map", env, params::color)?,
                     p.bump_scale,
-                )?),
-                None => None,
+                )?)),
+                (None, Some(t)) => Some(bump::Tilt::Normals(bump::NormalMap::new(
+                    t.reflectance("normal_map", env)?,
+                ))),
+                (None, None) => None,
             },
             opacity: match p.opacity {
                 Some(t) => Some(t.reflectance("opacity", env)?),

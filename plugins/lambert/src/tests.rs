@@ -219,3 +219,39 @@ fn opacity_passes_light_through_as_mitsubas_mask() {
         .unwrap();
     assert_eq!(s.lobe, NULL);
 }
+
+/// A normal map (the constant texel (0.7, 0.4, 0.9)) against Mitsuba
+/// 3.9.1's `normalmap` with a `rawconstant` of that value around
+/// `diffuse` (0.5), the hit flat as [`hit`] builds it: `eval` (f·cos of the
+/// light) and `pdf`.
+#[test]
+fn normal_map_is_mitsubas() {
+    #[rustfmt::skip]
+    #[allow(clippy::excessive_precision)]
+    const MITSUBA: &[([f32; 4], f32, f32)] = &[
+        ([20.0, 0.0, 40.0, 180.0], 6.1352674e-02, 1.2354334e-01),
+        ([50.0, 90.0, 30.0, 0.0], 1.5453884e-01, 3.1008053e-01),
+        ([70.0, 200.0, 60.0, 20.0], 2.2577738e-02, 4.6441756e-02),
+        ([10.0, 45.0, 80.0, 270.0], 4.6621412e-02, 1.1665268e-01),
+        ([60.0, 180.0, 50.0, 10.0], 1.3522878e-01, 2.7415812e-01),
+    ];
+    let m = Lambert::create(
+        parse_params(
+            r#"{"albedo": [0.5, 0.5, 0.5], "two_sided": false, "normal_map": [0.7, 0.4, 0.9]}"#,
+        )
+        .unwrap(),
+        &env("."),
+    )
+    .unwrap();
+    let g = hit([0.3, 0.4]);
+    let mut ctx = TraceCtx::new(0, 1, 0);
+    for &([to, po, ti, pi], want, want_pdf) in MITSUBA {
+        let (wo, wi) = (polar(to, po), polar(ti, pi));
+        let got = m.eval(&mut ctx, &g, wo, wi).r * wi.z;
+        let p = m.pdf(&mut ctx, &g, wo, wi, lobe::ALL).unwrap();
+        assert!(
+            (got - want).abs() <= 1e-4 * want && (p - want_pdf).abs() <= 1e-4 * want_pdf,
+            "{to} {po} → {ti} {pi}: {got}, pdf {p} vs Mitsuba's {want}, {want_pdf}"
+        );
+    }
+}

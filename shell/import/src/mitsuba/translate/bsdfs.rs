@@ -410,3 +410,45 @@ pub(super) fn roughdielectric(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, Impo
     p.finish(tx)?;
     Ok(Some(k))
 }
+
+/// `normalmap` around a `diffuse` → `lambert` with `normal_map` (the same
+/// frame, flips and shadowing term). `None` when lenient dropped it.
+pub(super) fn normalmap(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+    let nested: Vec<_> = b.children_tagged("bsdf").collect();
+    let inner = match nested[..] {
+        [one] if one.ty == "diffuse" => one,
+        _ => {
+            tx.refuse_plugin(b, "rtk translates a normalmap around one diffuse BSDF")?;
+            return Ok(None);
+        }
+    };
+    let mut p = Props::new(b);
+    for flag in ["use_shadowing_function", "flip_invalid_normals"] {
+        p.only_default(
+            tx,
+            flag,
+            &Value::Bool(true),
+            "rtk's normal map always applies Mitsuba's default rule",
+        )?;
+    }
+    let Some(prop) = p.get("normalmap") else {
+        return Err(ImportError::invalid(
+            &b.loc,
+            format!("{}: needs a `normalmap` <texture>", b.what()),
+        ));
+    };
+    let Value::Object(tex) = &prop.value else {
+        return Err(ImportError::invalid(
+            &prop.loc,
+            format!("{}: `normalmap` must be a <texture>", b.what()),
+        ));
+    };
+    let Some(map) = super::textures::texture(tx, tex, "normalmap")? else {
+        return Ok(None);
+    };
+    p.finish(tx)?;
+    let albedo = super::scene_objects::diffuse_albedo(tx, inner)?;
+    let mut k = super::scene_objects::diffuse_keys(albedo, false);
+    k.push(("normal_map".into(), map));
+    Ok(Some(k))
+}

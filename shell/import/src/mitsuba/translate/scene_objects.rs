@@ -262,6 +262,7 @@ fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
         "diffuse" => {}
         "roughplastic" if !two_sided => return super::bsdfs::roughplastic(tx, inner),
         "bumpmap" if !two_sided => return super::bsdfs::bumpmap(tx, inner),
+        "normalmap" if !two_sided => return super::bsdfs::normalmap(tx, inner),
         "plastic" if !two_sided => return super::bsdfs::plastic(tx, inner),
         "conductor" if !two_sided => return super::bsdfs::conductor(tx, inner),
         "mask" if !two_sided => return super::bsdfs::mask(tx, inner),
@@ -271,7 +272,7 @@ fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
         _ => {
             tx.refuse_plugin(
                 inner,
-                "rtk translates the BSDFs diffuse, twosided(diffuse), plastic, roughplastic, conductor, roughconductor, dielectric, roughdielectric, bumpmap(diffuse) and mask(diffuse) so far",
+                "rtk translates the BSDFs diffuse, twosided(diffuse), plastic, roughplastic, conductor, roughconductor, dielectric, roughdielectric, bumpmap(diffuse), normalmap(diffuse) and mask(diffuse) so far",
             )?;
             return Ok(None);
         }
