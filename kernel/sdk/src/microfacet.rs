@@ -146,6 +146,66 @@ impl Beckmann {
     }
 }
 
+/// Anisotropic GGX: roughness `ax` along the tangent frame's x (dp/du),
+/// `ay` along y. The same formulas as [`Ggx`] with the slopes stretched
+/// (Mitsuba's `alpha_u`, `alpha_v`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GgxAniso {
+    /// α along x.
+    pub ax: f32,
+    /// α along y.
+    pub ay: f32,
+}
+
+impl GgxAniso {
+    /// D(m); 0 below the surface.
+    #[inline]
+    pub fn d(&self, m: Vec3) -> f32 {
+        if !(m.z > 0.0) {
+            return 0.0;
+        }
+        let (x, y) = (m.x / self.ax, m.y / self.ay);
+        let k = x * x + y * y + m.z * m.z;
+        1.0 / (PI * self.ax * self.ay * k * k)
+    }
+
+    /// Smith's Λ(w) with the stretched tangent.
+    #[inline]
+    pub fn lambda(&self, w: Vec3) -> f32 {
+        let (x, y) = (self.ax * w.x, self.ay * w.y);
+        let t = (x * x + y * y) / (w.z * w.z);
+        if !t.is_finite() {
+            return f32::INFINITY;
+        }
+        0.5 * t / (1.0 + (1.0 + t).sqrt())
+    }
+
+    /// G1(w, m) as [`Ggx::g1`].
+    #[inline]
+    pub fn g1(&self, w: Vec3, m: Vec3) -> f32 {
+        if !(w.dot(m) * w.z > 0.0) {
+            return 0.0;
+        }
+        1.0 / (1.0 + self.lambda(w))
+    }
+
+    /// A visible normal for `lo` (Heitz 2018 with the stretch per axis).
+    pub fn visible_normal(&self, lo: Vec3, u: [f32; 2]) -> Vec3 {
+        let vh = Vec3::new(self.ax * lo.x, self.ay * lo.y, lo.z).normalize();
+        let nh = Ggx { alpha: 1.0 }.visible_normal(vh, u);
+        Vec3::new(self.ax * nh.x, self.ay * nh.y, nh.z.max(0.0)).normalize()
+    }
+
+    /// Density of [`Self::visible_normal`] choosing `m`.
+    #[inline]
+    pub fn visible_pdf(&self, lo: Vec3, m: Vec3) -> f32 {
+        if !(lo.z > 0.0) {
+            return 0.0;
+        }
+        self.g1(lo, m) * self.d(m) * lo.dot(m).max(0.0) / lo.z
+    }
+}
+
 /// A distribution of normals as the rough shaders use it: its D, Mitsuba's
 /// G1, and a sampler with its density.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -154,6 +214,8 @@ pub enum Normals {
     Ggx(Ggx),
     /// Beckmann, sampled by D cos θ.
     Beckmann(Beckmann),
+    /// Anisotropic GGX, sampled by visible normals (needs the tangent frame).
+    GgxAniso(GgxAniso),
 }
 
 impl Normals {
@@ -172,6 +234,7 @@ impl Normals {
         match self {
             Normals::Ggx(g) => g.d(m),
             Normals::Beckmann(b) => b.d(m),
+            Normals::GgxAniso(a) => a.d(m),
         }
     }
 
@@ -181,6 +244,7 @@ impl Normals {
         match self {
             Normals::Ggx(g) => g.g1(w, m),
             Normals::Beckmann(b) => b.g1(w, m),
+            Normals::GgxAniso(a) => a.g1(w, m),
         }
     }
 
@@ -190,6 +254,7 @@ impl Normals {
         match self {
             Normals::Ggx(g) => g.visible_normal(lo, u),
             Normals::Beckmann(b) => b.sample(u),
+            Normals::GgxAniso(a) => a.visible_normal(lo, u),
         }
     }
 
@@ -199,6 +264,7 @@ impl Normals {
         match self {
             Normals::Ggx(g) => g.visible_pdf(lo, m),
             Normals::Beckmann(b) => b.d(m) * m.z.max(0.0),
+            Normals::GgxAniso(a) => a.visible_pdf(lo, m),
         }
     }
 }

@@ -44,6 +44,13 @@ fn over_visible_normals(normals: Normals, wi: Vec3, n: usize, term: impl Fn(Vec3
                     let w = b.g1(wi, m) * wi.dot(m).max(0.0) / (wi.z * m.z);
                     (m, if w.is_finite() { w } else { 0.0 })
                 }
+                // Any other sampler: weighted by the visible density over its own.
+                other => {
+                    let m = other.sample(wi, u);
+                    let visible = other.g1(wi, m) * other.d(m) * wi.dot(m).max(0.0) / wi.z;
+                    let w = visible / other.pdf(wi, m);
+                    (m, if w.is_finite() { w } else { 0.0 })
+                }
             };
             if w > 0.0 {
                 sum += (term(m) * w) as f64 * wx * wy * 0.25;

@@ -242,7 +242,7 @@ fn bsdf_shader(tx: &mut Tx, b: &Rc<Obj>) -> Result<String, ImportError> {
 }
 
 /// A BSDF's shader keys; `None` when lenient dropped it.
-fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
+pub(super) fn bsdf_keys(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
     let two_sided = b.ty == "twosided";
     let inner: &Obj = if two_sided {
         let nested: Vec<_> = b.children_tagged("bsdf").collect();
