@@ -164,7 +164,19 @@ impl Frame {
         } else {
             ns
         };
-        let (t, b) = n.any_orthonormal_pair();
+        // Anisotropy is measured in Mitsuba's shading frame: x along dp/du
+        // made perpendicular to the normal, where the hit has tangents.
+        let dpdu = g.dpdu.v();
+        let s = if g.filled & geom_mask::TANGENTS != 0 {
+            (dpdu - n * n.dot(dpdu)).normalize_or_zero()
+        } else {
+            Vec3::ZERO
+        };
+        let (t, b) = if s == Vec3::ZERO || !s.is_finite() {
+            n.any_orthonormal_pair()
+        } else {
+            (s, n.cross(s))
+        };
         Frame { t, b, n }
     }
     #[inline]
@@ -783,5 +795,57 @@ mod tests {
         assert_eq!(e.key, "reflectance");
         let p: Params = parse_params("{}").unwrap();
         assert_eq!((p.alpha, p.reflectance), (0.1, [1.0; 3]));
+    }
+
+    /// Anisotropy follows dp/du: the lobe on a tilted surface, its frame
+    /// from dp/du made perpendicular to the normal, is the flat one turned.
+    #[test]
+    fn anisotropy_turns_with_the_frame() {
+        let m = RoughConductor::create(
+            Params {
+                masking: Some("separable".into()),
+                two_sided: false,
+                alpha_u: Some(0.25),
+                alpha_v: Some(0.05),
+                ..params(0.1, [1.0; 3])
+            },
+            &env(),
+        )
+        .unwrap();
+        let flat = LocalGeom {
+            dpdu: Vec3::X.into(),
+            dpdv: Vec3::Y.into(),
+            filled: geom_mask::ALL,
+            ..geom(Vec3::Z)
+        };
+        let n = Vec3::new(-0.932725, 0.300005, 0.200054).normalize();
+        let dpdu = Vec3::new(1.30692, 0.0, 5.82017);
+        let s = (dpdu - n * n.dot(dpdu)).normalize();
+        let t = n.cross(s);
+        let g = LocalGeom {
+            ns: n.into(),
+            ng: n.into(),
+            dpdu: dpdu.into(),
+            dpdv: t.into(),
+            filled: geom_mask::ALL,
+            ..LocalGeom::EMPTY
+        };
+        let mut ctx = TraceCtx::new(0, 1, 0);
+        let world = |v: Vec3| s * v.x + t * v.y + n * v.z;
+        for (lo, li) in [
+            (Vec3::new(0.3, 0.2, 0.9), Vec3::new(-0.2, -0.1, 0.95)),
+            (Vec3::new(0.5, -0.3, 0.6), Vec3::new(-0.6, 0.2, 0.5)),
+        ] {
+            let (lo, li) = (lo.normalize(), li.normalize());
+            let a = m.eval(&mut ctx, &flat, lo, li).r;
+            let b = m.eval(&mut ctx, &g, world(lo), world(li)).r;
+            assert!((a - b).abs() <= 1e-4 * a, "flat {a}, turned {b}");
+            let (pa, pb) = (
+                m.pdf(&mut ctx, &flat, lo, li, lobe::ALL).unwrap(),
+                m.pdf(&mut ctx, &g, world(lo), world(li), lobe::ALL)
+                    .unwrap(),
+            );
+            assert!((pa - pb).abs() <= 1e-4 * pa, "pdf flat {pa}, turned {pb}");
+        }
     }
 }

@@ -296,20 +296,20 @@ pub(super) fn roughconductor(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, Impor
         (false, false) => None,
         _ => Some((p.float("alpha_u", alpha)?, p.float("alpha_v", alpha)?)),
     };
-    // rtk's anisotropic GGX equals Mitsuba's at a shading point (the
-    // plugin's tests), but Mitsuba's test scene with it does not yet pass:
-    // refused until the difference is found.
-    if aniso.is_some_and(|(u, v)| u != v) {
-        tx.refuse_plugin(
-            b,
-            "anisotropic roughness (alpha_u ≠ alpha_v) is not translated yet",
-        )?;
+    if aniso.is_some_and(|(u, v)| u != v) && dist != "ggx" {
+        tx.refuse_plugin(b, "rtk's anisotropic roughconductor is GGX only")?;
         return Ok(None);
     }
     k.push(("distribution".into(), T::String(dist)));
     k.push(("masking".into(), T::String("separable".into())));
-    let alpha = aniso.map_or(alpha, |(u, _)| u);
-    k.push(("alpha".into(), T::Float(alpha)));
+    match aniso {
+        Some((u, v)) if u != v => {
+            k.push(("alpha_u".into(), T::Float(u)));
+            k.push(("alpha_v".into(), T::Float(v)));
+        }
+        Some((u, _)) => k.push(("alpha".into(), T::Float(u))),
+        None => k.push(("alpha".into(), T::Float(alpha))),
+    }
     let Some(index) = complex_index(tx, b, &mut p)? else {
         return Ok(None);
     };
