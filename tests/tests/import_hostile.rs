@@ -169,6 +169,22 @@ fn cases() -> Vec<Case> {
         )
         .with("huge.png", png_header(100_000, 100_000)),
         case(
+            "a missing spectrum file",
+            scene("    <shape type=\"sphere\">\n        <bsdf type=\"diffuse\">\n            <spectrum name=\"reflectance\" filename=\"gone.spd\"/>\n        </bsdf>\n    </shape>"),
+            &["X.xml:14:13: ", "cannot read", "gone.spd"],
+        ),
+        case(
+            "a spectrum file with three numbers on a line",
+            scene("    <shape type=\"sphere\">\n        <bsdf type=\"diffuse\">\n            <spectrum name=\"reflectance\" filename=\"bad.spd\"/>\n        </bsdf>\n    </shape>"),
+            &["X.xml:14:13: ", "bad.spd:2: expected two numbers"],
+        )
+        .with("bad.spd", "400 0.5\n500 0.6 0.7\n"),
+        case(
+            "a conductor material with no spectra beside the scene",
+            scene("    <shape type=\"sphere\">\n        <bsdf type=\"conductor\">\n            <string name=\"material\" value=\"Unobtainium\"/>\n        </bsdf>\n    </shape>"),
+            &["X.xml:13:9: ", "material `Unobtainium`", "ior/Unobtainium.eta.spd"],
+        ),
+        case(
             "an include cycle",
             scene("    <include filename=\"b.xml\"/>"),
             &["b.xml:2:5: ", "include cycle", "X.xml -> ", "b.xml -> "],
