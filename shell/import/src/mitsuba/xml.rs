@@ -495,6 +495,21 @@ impl Parser {
         Ok((out, whole))
     }
 
+    /// A `<spectrum>`'s value: its `filename`'s `.spd` pairs (found as a
+    /// plugin's file is), or its `value` (with the parameter it names).
+    fn spectrum_value(
+        &self,
+        node: roxmltree::Node,
+        loc: &Loc,
+    ) -> Result<(Value, Option<String>), ImportError> {
+        if let Some((name, _)) = self.opt_attr(node, "filename", loc)? {
+            let path = find(&self.search, &name).unwrap_or_else(|| relative_to(&loc.file, &name));
+            return Ok((spectrum_file(&path, loc)?, None));
+        }
+        let (v, param) = self.attr(node, "value", loc)?;
+        Ok((spectrum(&v, loc)?, param))
+    }
+
     /// An `<include>`d file name resolved as Mitsuba does: beside the
     /// including file, then beside each file including that one, then as
     /// any file name ([`Document::resolve`]).
@@ -553,17 +568,8 @@ impl Parser {
                 prop(Value::Color(color(&v, loc)?), param)
             }
             "spectrum" if node.attribute("type").is_none() => {
-                match self.opt_attr(node, "filename", loc)? {
-                    Some((name, _)) => {
-                        let path = find(&self.search, &name)
-                            .unwrap_or_else(|| relative_to(&loc.file, &name));
-                        prop(spectrum_file(&path, loc)?, None)
-                    }
-                    None => {
-                        let (v, param) = self.attr(node, "value", loc)?;
-                        prop(spectrum(&v, loc)?, param)
-                    }
-                }
+                let (v, param) = self.spectrum_value(node, loc)?;
+                prop(v, param)
             }
             "vector" | "point" => {
                 let v = self.xyz(node, loc, 0.0)?;

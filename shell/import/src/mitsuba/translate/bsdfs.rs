@@ -74,16 +74,7 @@ fn ior(p: &mut Props, name: &str, default: &str) -> Result<f64, ImportError> {
 pub(super) fn roughplastic(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
     let mut p = Props::new(b);
     // Mitsuba's default is Beckmann (rtk's is GGX: always written).
-    let dist = p.string("distribution", "beckmann")?.to_ascii_lowercase();
-    if dist != "ggx" && dist != "beckmann" {
-        return Err(ImportError::invalid(
-            &b.loc,
-            format!(
-                "{}: distribution `{dist}`: Mitsuba's are ggx and beckmann",
-                b.what()
-            ),
-        ));
-    }
+    let dist = distribution(b, &mut p)?;
     // Sampling only: the image's mean is the same either way.
     p.ignore(&["sample_visible"]);
     let mut k = def("roughplastic");
@@ -120,12 +111,8 @@ fn coat(tx: &mut Tx, b: &Obj, p: &mut Props, k: &mut Keys) -> Result<bool, Impor
         .color(tx, "diffuse_reflectance", Role::Reflectance)?
         .unwrap_or(vec3([0.5; 3]));
     k.push(("diffuse_reflectance".into(), rho));
-    if let Some(s) = p.color(tx, "specular_reflectance", Role::Reflectance)? {
-        if !matches!(s, T::Array(_)) {
-            tx.refuse_plugin(b, "a textured specular_reflectance is not translated")?;
-            return Ok(false);
-        }
-        k.push(("specular_reflectance".into(), s));
+    if !tint(tx, b, p, k, "specular_reflectance", "specular_reflectance")? {
+        return Ok(false);
     }
     if p.bool("nonlinear", false)? {
         k.push(("nonlinear".into(), T::Boolean(true)));
@@ -191,12 +178,8 @@ pub(super) fn conductor(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportErro
         k.push(("eta".into(), eta));
         k.push(("k".into(), kk));
     }
-    if let Some(s) = p.color(tx, "specular_reflectance", Role::Reflectance)? {
-        if !matches!(s, T::Array(_)) {
-            tx.refuse_plugin(b, "a textured specular_reflectance is not translated")?;
-            return Ok(None);
-        }
-        k.push(("reflectance".into(), s));
+    if !tint(tx, b, &mut p, &mut k, "specular_reflectance", "reflectance")? {
+        return Ok(None);
     }
     k.push(("two_sided".into(), T::Boolean(false)));
     p.finish(tx)?;
@@ -279,16 +262,7 @@ fn material_spectrum(tx: &Tx, b: &Obj, material: &str, part: &str) -> Result<T, 
 /// lenient dropped it.
 pub(super) fn roughconductor(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
     let mut p = Props::new(b);
-    let dist = p.string("distribution", "beckmann")?.to_ascii_lowercase();
-    if dist != "ggx" && dist != "beckmann" {
-        return Err(ImportError::invalid(
-            &b.loc,
-            format!(
-                "{}: distribution `{dist}`: Mitsuba's are ggx and beckmann",
-                b.what()
-            ),
-        ));
-    }
+    let dist = distribution(b, &mut p)?;
     p.ignore(&["sample_visible"]);
     let mut k = def("roughconductor");
     let alpha = p.float("alpha", 0.1)?;
@@ -317,12 +291,8 @@ pub(super) fn roughconductor(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, Impor
         k.push(("eta".into(), eta));
         k.push(("k".into(), kk));
     }
-    if let Some(s) = p.color(tx, "specular_reflectance", Role::Reflectance)? {
-        if !matches!(s, T::Array(_)) {
-            tx.refuse_plugin(b, "a textured specular_reflectance is not translated")?;
-            return Ok(None);
-        }
-        k.push(("reflectance".into(), s));
+    if !tint(tx, b, &mut p, &mut k, "specular_reflectance", "reflectance")? {
+        return Ok(None);
     }
     k.push(("two_sided".into(), T::Boolean(false)));
     p.finish(tx)?;
@@ -376,12 +346,8 @@ pub(super) fn dielectric(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportErr
         ("specular_reflectance", "reflectance"),
         ("specular_transmittance", "transmittance"),
     ] {
-        if let Some(s) = p.color(tx, theirs, Role::Reflectance)? {
-            if !matches!(s, T::Array(_)) {
-                tx.refuse_plugin(b, &format!("a textured {theirs} is not translated"))?;
-                return Ok(None);
-            }
-            k.push((ours.into(), s));
+        if !tint(tx, b, &mut p, &mut k, theirs, ours)? {
+            return Ok(None);
         }
     }
     k.push(("scale_radiance".into(), T::Boolean(true)));
@@ -394,16 +360,7 @@ pub(super) fn dielectric(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportErr
 /// scaling. Anisotropic roughness is refused. `None` when lenient dropped it.
 pub(super) fn roughdielectric(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, ImportError> {
     let mut p = Props::new(b);
-    let dist = p.string("distribution", "beckmann")?.to_ascii_lowercase();
-    if dist != "ggx" && dist != "beckmann" {
-        return Err(ImportError::invalid(
-            &b.loc,
-            format!(
-                "{}: distribution `{dist}`: Mitsuba's are ggx and beckmann",
-                b.what()
-            ),
-        ));
-    }
+    let dist = distribution(b, &mut p)?;
     p.ignore(&["sample_visible"]);
     let mut k = def("roughdielectric");
     k.push(("distribution".into(), T::String(dist)));
@@ -414,12 +371,8 @@ pub(super) fn roughdielectric(tx: &mut Tx, b: &Obj) -> Result<Option<Keys>, Impo
         ("specular_reflectance", "reflectance"),
         ("specular_transmittance", "transmittance"),
     ] {
-        if let Some(s) = p.color(tx, theirs, Role::Reflectance)? {
-            if !matches!(s, T::Array(_)) {
-                tx.refuse_plugin(b, &format!("a textured {theirs} is not translated"))?;
-                return Ok(None);
-            }
-            k.push((ours.into(), s));
+        if !tint(tx, b, &mut p, &mut k, theirs, ours)? {
+            return Ok(None);
         }
     }
     k.push(("scale_radiance".into(), T::Boolean(true)));
@@ -495,4 +448,40 @@ fn is_identity_map(b: &Obj) -> bool {
             q.name == "value"
                 && matches!(q.value, Value::Vector(v) | Value::Point(v) if v == [0.5, 0.5, 1.0])
         })
+}
+
+/// The microfacet `distribution`, Mitsuba's default (Beckmann) if absent.
+fn distribution(b: &Obj, p: &mut Props) -> Result<String, ImportError> {
+    let dist = p.string("distribution", "beckmann")?.to_ascii_lowercase();
+    if dist != "ggx" && dist != "beckmann" {
+        return Err(ImportError::invalid(
+            &b.loc,
+            format!(
+                "{}: distribution `{dist}`: Mitsuba's are ggx and beckmann",
+                b.what()
+            ),
+        ));
+    }
+    Ok(dist)
+}
+
+/// Mitsuba's colour `theirs` as rtk's `ours` on `k`, if given; false when
+/// it is a texture (refused: rtk's tints are colours) and lenient dropped
+/// the BSDF.
+fn tint(
+    tx: &mut Tx,
+    b: &Obj,
+    p: &mut Props,
+    k: &mut Keys,
+    theirs: &str,
+    ours: &str,
+) -> Result<bool, ImportError> {
+    if let Some(c) = p.color(tx, theirs, Role::Reflectance)? {
+        if !matches!(c, T::Array(_)) {
+            tx.refuse_plugin(b, &format!("a textured {theirs} is not translated"))?;
+            return Ok(false);
+        }
+        k.push((ours.into(), c));
+    }
+    Ok(true)
 }
